@@ -1,0 +1,196 @@
+#include "description.h"
+
+#include <cstdint>
+#include <cstdio>
+#include <map>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+namespace hdjoint::fmu {
+
+namespace {
+
+const char* causality_name(Causality c) {
+    switch (c) {
+        case Causality::Parameter: return "parameter";
+        case Causality::Input: return "input";
+        case Causality::Output: return "output";
+    }
+    return "local";
+}
+
+std::string escape(const std::string& s) {
+    std::string out;
+    for (char ch : s) {
+        switch (ch) {
+            case '&': out += "&amp;"; break;
+            case '<': out += "&lt;"; break;
+            case '>': out += "&gt;"; break;
+            case '"': out += "&quot;"; break;
+            default: out += ch;
+        }
+    }
+    return out;
+}
+
+std::string number(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    return buf;
+}
+
+// SI base-unit exponents of every unit the models use (kg, m, s, A, rad).
+struct BaseUnits { int kg, m, s, A, rad; };
+const std::map<std::string, BaseUnits>& unit_table() {
+    static const std::map<std::string, BaseUnits> table = {
+        {"1", {0, 0, 0, 0, 0}},       {"rad", {0, 0, 0, 0, 1}},      {"rad/s", {0, 0, -1, 0, 1}},
+        {"A", {0, 0, 0, 1, 0}},       {"s", {0, 0, 1, 0, 0}},        {"N.m", {1, 2, -2, 0, 0}},
+        {"N.m/A", {1, 2, -2, -1, 0}}, {"N.m/rad", {1, 2, -2, 0, -1}}, {"kg.m2", {1, 2, 0, 0, 0}},
+        {"N.m.s/rad", {1, 2, -1, 0, -1}}, {"1/(N.m)", {-1, -2, 2, 0, 0}}, {"1/rad", {0, 0, 0, 0, -1}},
+    };
+    return table;
+}
+
+std::string unit_definitions(const ModelInfo& info) {
+    std::set<std::string> used;
+    for (const Variable& v : info.variables) used.insert(v.unit);
+    std::ostringstream x;
+    x << "  <UnitDefinitions>\n";
+    for (const std::string& u : used) {
+        auto it = unit_table().find(u);
+        if (it == unit_table().end()) throw std::runtime_error("unit '" + u + "' has no base-unit definition");
+        const BaseUnits& b = it->second;
+        x << "    <Unit name=\"" << escape(u) << "\"><BaseUnit";
+        if (b.kg) x << " kg=\"" << b.kg << "\"";
+        if (b.m) x << " m=\"" << b.m << "\"";
+        if (b.s) x << " s=\"" << b.s << "\"";
+        if (b.A) x << " A=\"" << b.A << "\"";
+        if (b.rad) x << " rad=\"" << b.rad << "\"";
+        x << "/></Unit>\n";
+    }
+    x << "  </UnitDefinitions>\n";
+    return x.str();
+}
+
+// 64-bit FNV-1a, run twice with different seeds for 128 bits.
+std::uint64_t fnv1a(const std::string& s, std::uint64_t seed) {
+    std::uint64_t h = seed;
+    for (unsigned char c : s) {
+        h ^= c;
+        h *= 1099511628211ull;
+    }
+    return h;
+}
+
+}  // namespace
+
+std::string guid(const ModelInfo& info) {
+    std::ostringstream canonical;
+    canonical << info.model_identifier << '|';
+    for (const Variable& v : info.variables)
+        canonical << v.name << ',' << v.value_reference << ',' << causality_name(v.causality) << ',' << v.unit
+                  << ',' << number(v.start) << ',' << number(v.min) << ',' << number(v.max) << ';';
+    const std::uint64_t a = fnv1a(canonical.str(), 14695981039346656037ull);
+    const std::uint64_t b = fnv1a(canonical.str(), 0x9e3779b97f4a7c15ull);
+    char buf[48];
+    std::snprintf(buf, sizeof buf, "{%08x-%04x-%04x-%04x-%012llx}", static_cast<unsigned>(a >> 32),
+                  static_cast<unsigned>((a >> 16) & 0xffff), static_cast<unsigned>(a & 0xffff),
+                  static_cast<unsigned>(b >> 48), static_cast<unsigned long long>(b & 0xffffffffffffull));
+    return buf;
+}
+
+std::string model_description_xml(const ModelInfo& info, const std::vector<std::string>& sources) {
+    std::ostringstream x;
+    x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+      << "<!-- Generated from the hdjoint parameter and variable tables; do not edit. -->\n"
+      << "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"" << info.model_name << "\" guid=\""
+      << guid(info) << "\"\n  description=\"" << escape(info.description)
+      << "\"\n  generationTool=\"hdjoint\" version=\"0.1.0\" variableNamingConvention=\"flat\""
+      << " numberOfEventIndicators=\"0\">\n";
+    x << "  <CoSimulation modelIdentifier=\"" << info.model_identifier
+      << "\" canHandleVariableCommunicationStepSize=\"true\" canInterpolateInputs=\"false\""
+      << " canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\">\n    <SourceFiles>\n";
+    for (const std::string& s : sources)
+        if (s.size() > 4 && s.substr(s.size() - 4) == ".cpp") x << "      <File name=\"" << escape(s) << "\"/>\n";
+    x << "    </SourceFiles>\n  </CoSimulation>\n";
+    x << unit_definitions(info);
+    x << "  <LogCategories>\n"
+      << "    <Category name=\"logStatusWarning\" description=\"recoverable problems\"/>\n"
+      << "    <Category name=\"logStatusError\" description=\"errors: bad input, illegal calls\"/>\n"
+      << "    <Category name=\"logAll\" description=\"everything\"/>\n  </LogCategories>\n";
+    x << "  <DefaultExperiment startTime=\"0\" stopTime=\"10\" stepSize=\"0.001\"/>\n";
+    x << "  <ModelVariables>\n";
+    std::vector<std::size_t> outputs;
+    for (std::size_t i = 0; i < info.variables.size(); ++i) {
+        const Variable& v = info.variables[i];
+        x << "    <!-- " << i + 1 << " -->\n    <ScalarVariable name=\"" << escape(v.name)
+          << "\" valueReference=\"" << v.value_reference << "\" causality=\"" << causality_name(v.causality)
+          << "\"";
+        switch (v.causality) {
+            case Causality::Parameter: x << " variability=\"fixed\" initial=\"exact\""; break;
+            case Causality::Input: x << " variability=\"continuous\""; break;
+            case Causality::Output:
+                x << " variability=\"continuous\" initial=\"calculated\"";
+                outputs.push_back(i + 1);
+                break;
+        }
+        x << "\n      description=\"" << escape(v.description) << "\">\n      <Real unit=\"" << escape(v.unit)
+          << "\"";
+        if (v.causality != Causality::Output) x << " start=\"" << number(v.start) << "\"";
+        if (v.min > -1e299) x << " min=\"" << number(v.min) << "\"";
+        if (v.max < 1e299) x << " max=\"" << number(v.max) << "\"";
+        x << "/>\n    </ScalarVariable>\n";
+    }
+    x << "  </ModelVariables>\n  <ModelStructure>\n    <Outputs>\n";
+    // Outputs change only inside doStep: no direct feedthrough from inputs,
+    // so masters see no algebraic loop when a controller closes the loop.
+    for (std::size_t k : outputs) x << "      <Unknown index=\"" << k << "\" dependencies=\"\"/>\n";
+    x << "    </Outputs>\n    <InitialUnknowns>\n";
+    for (std::size_t k : outputs) x << "      <Unknown index=\"" << k << "\"/>\n";
+    x << "    </InitialUnknowns>\n  </ModelStructure>\n</fmiModelDescription>\n";
+    return x.str();
+}
+
+std::string build_description_xml(const ModelInfo& info, const std::vector<std::string>& sources) {
+    std::ostringstream x;
+    x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+      << "<fmiBuildDescription fmiVersion=\"3.0\">\n"
+      << "  <BuildConfiguration modelIdentifier=\"" << info.model_identifier
+      << "\" description=\"Rebuild from sources/: C++17, include directory sources/ (holds Eigen and the"
+      << " hdjoint headers); the FMI 2.0 headers come from the importing tool.\">\n"
+      << "    <SourceFileSet language=\"C++17\">\n";
+    for (const std::string& s : sources)
+        if (s.size() > 4 && s.substr(s.size() - 4) == ".cpp") x << "      <SourceFile name=\"" << escape(s) << "\"/>\n";
+    x << "    </SourceFileSet>\n  </BuildConfiguration>\n</fmiBuildDescription>\n";
+    return x.str();
+}
+
+std::string documentation_html(const ModelInfo& info) {
+    std::ostringstream h;
+    h << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>" << info.model_name
+      << "</title>\n<style>body{font-family:sans-serif;max-width:60em;margin:2em auto}"
+      << "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:.2em .5em;text-align:left}"
+      << "code{background:#f4f4f4}</style></head><body>\n<h1>" << info.model_name << "</h1>\n<p>"
+      << escape(info.description) << "</p>\n"
+      << "<p>FMI 2.0 Co-Simulation, built by <code>hdjoint</code>. Physics: Yu et al. 2018, eq. (1)-(31), with"
+      << " the sign conventions <code>dtheta = theta_m/N - theta_l</code>, <code>dtheta_f = dtheta - wg(tau_w)"
+      << " - theta_err</code>, <code>tau_f = tan(Cf*Kf*dtheta_f)/Cf</code>. The C++ sources are in"
+      << " <code>sources/</code> (rebuild with <code>sources/buildDescription.xml</code>, include directory"
+      << " <code>sources/</code>).</p>\n<h2>Variables</h2>\n<table><tr><th>name</th><th>causality</th>"
+      << "<th>unit</th><th>start</th><th>range</th><th>description</th></tr>\n";
+    for (const Variable& v : info.variables) {
+        h << "<tr><td><code>" << escape(v.name) << "</code></td><td>" << causality_name(v.causality) << "</td><td>"
+          << escape(v.unit) << "</td><td>" << (v.causality == Causality::Output ? "" : number(v.start))
+          << "</td><td>";
+        if (v.causality == Causality::Parameter) h << "[" << number(v.min) << ", " << number(v.max) << "]";
+        h << "</td><td>" << escape(v.description) << "</td></tr>\n";
+    }
+    h << "</table>\n<h2>Errors</h2><p>Non-finite inputs, parameters outside their range, a torsion beyond the"
+      << " atan law's asymptote and calls out of the FMI state machine return <code>fmi2Error</code> with a"
+      << " message through the logger naming the variable and value; recoverable filter problems return"
+      << " <code>fmi2Warning</code>.</p>\n</body></html>\n";
+    return h.str();
+}
+
+}  // namespace hdjoint::fmu

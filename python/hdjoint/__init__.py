@@ -1,0 +1,1 @@
+"""hdjoint: torque estimation for harmonic-drive robot joints."""

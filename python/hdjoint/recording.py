@@ -1,0 +1,423 @@
+"""Reading and writing recordings in the contract's CSV format.
+
+A recording is a CSV file with one header row, SI units and one row per
+sample, time strictly increasing.  Required columns: ``time``, ``i_m``,
+``theta_m``, ``theta_l``; optional: ``tau_sensor``.  Any other column is kept
+(in ``Recording.extra``) and otherwise ignored.
+
+A malformed file raises one ``RecordingError`` naming the file and, where it
+applies, the 1-based line (the header is line 1) and the column.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+import secrets
+import warnings
+from dataclasses import dataclass, field
+from typing import Iterable, Mapping, Sequence
+
+import numpy as np
+
+REQUIRED_COLUMNS = ("time", "i_m", "theta_m", "theta_l")
+OPTIONAL_COLUMNS = ("tau_sensor",)
+# Columns the tools compute with: these must be numbers and finite.
+KNOWN_COLUMNS = REQUIRED_COLUMNS + OPTIONAL_COLUMNS
+MIN_ROWS = 2
+
+__all__ = [
+    "REQUIRED_COLUMNS",
+    "OPTIONAL_COLUMNS",
+    "Recording",
+    "RecordingError",
+    "read_recording",
+    "write_csv",
+    "write_recording",
+]
+
+
+class RecordingError(ValueError):
+    """A recording that cannot be read.
+
+    The message always starts with the file name, then the line and column
+    when the problem has one, e.g.
+    ``data.csv: line 17, column theta_l: 'abc' is not a number``.
+    """
+
+    def __init__(self, path, reason: str, line: int | None = None,
+                 column: str | None = None):
+        self.path = os.fspath(path) if path is not None else None
+        self.reason = reason
+        self.line = line
+        self.column = column
+        where = []
+        if line is not None:
+            where.append(f"line {line}")
+        if column is not None:
+            where.append(f"column {column}")
+        prefix = f"{self.path}: " + (", ".join(where) + ": " if where else "")
+        super().__init__(prefix + reason)
+
+    def __reduce__(self):
+        # Keep the exception picklable (e.g. across multiprocessing) despite
+        # the custom constructor signature.
+        return (type(self), (self.path, self.reason, self.line, self.column))
+
+
+def _float_array(values, name: str) -> np.ndarray:
+    arr = np.asarray(values, dtype=float)
+    if arr.ndim != 1:
+        raise ValueError(f"{name} must be one-dimensional, got shape {arr.shape}")
+    return arr
+
+
+@dataclass
+class Recording:
+    """One recording: the contract's columns as float arrays, plus extras."""
+
+    time: np.ndarray
+    i_m: np.ndarray
+    theta_m: np.ndarray
+    theta_l: np.ndarray
+    tau_sensor: np.ndarray | None = None
+    extra: dict[str, np.ndarray] = field(default_factory=dict)
+    path: str | None = None
+
+    def __post_init__(self):
+        # Normalise to 1-D float arrays so callers may pass lists, and catch
+        # mismatched lengths here rather than deep inside an estimator.
+        for name in KNOWN_COLUMNS:
+            value = getattr(self, name)
+            if value is not None:
+                setattr(self, name, _float_array(value, name))
+        self.extra = {k: np.asarray(v) for k, v in self.extra.items()}
+        n = len(self.time)
+        for name, col in self.columns().items():
+            if len(col) != n:
+                raise ValueError(
+                    f"column {name} has {len(col)} samples, time has {n}")
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """All columns in file order: contract columns first, then extras."""
+        cols = {name: getattr(self, name) for name in KNOWN_COLUMNS}
+        cols = {k: v for k, v in cols.items() if v is not None}
+        cols.update(self.extra)
+        return cols
+
+    def __len__(self) -> int:
+        return len(self.time)
+
+    @property
+    def duration(self) -> float:
+        """Time from the first to the last sample, s."""
+        return float(self.time[-1] - self.time[0]) if len(self) else 0.0
+
+    @property
+    def median_step(self) -> float:
+        """Median sample period, s (robust to the odd dropped sample)."""
+        if len(self) < 2:
+            raise ValueError("median_step needs at least 2 samples")
+        return float(np.median(np.diff(self.time)))
+
+    def sample_times_regular(self, rtol: float = 1e-3) -> bool:
+        """True when every step is within ``rtol`` of the median step.
+
+        The estimators assume a fixed sample period; this tells whether the
+        recording honours it.
+        """
+        step = self.median_step
+        return bool(np.all(np.abs(np.diff(self.time) - step) <= rtol * step))
+
+    def slice(self, start: int | None = None, stop: int | None = None) -> "Recording":
+        """Samples ``start:stop`` (Python index semantics) as a new Recording.
+
+        The arrays are copies, so editing the slice leaves this one intact.
+        """
+        sel = slice(start, stop)
+
+        def cut(a):
+            return None if a is None else a[sel].copy()
+
+        return Recording(
+            time=cut(self.time), i_m=cut(self.i_m), theta_m=cut(self.theta_m),
+            theta_l=cut(self.theta_l), tau_sensor=cut(self.tau_sensor),
+            extra={k: cut(v) for k, v in self.extra.items()}, path=self.path)
+
+
+# --------------------------------------------------------------------------
+# Reading
+
+
+def _read_text(path: str) -> str:
+    """The whole file as text (a recording fits in memory by design)."""
+    try:
+        # utf-8-sig: tolerate the byte-order mark spreadsheet programs write.
+        with open(path, encoding="utf-8-sig") as f:
+            return f.read()
+    except FileNotFoundError:
+        raise RecordingError(path, "file not found") from None
+    except IsADirectoryError:
+        raise RecordingError(path, "is a directory, not a file") from None
+    except UnicodeDecodeError as exc:
+        raise RecordingError(path, f"not UTF-8 text ({exc.reason} at byte "
+                                   f"{exc.start})") from None
+    except OSError as exc:
+        raise RecordingError(path, f"cannot read file: {exc.strerror or exc}") from None
+
+
+def _split_rows(path: str, text: str) -> tuple[list[str], list[list[str]], list[int]]:
+    """Header, data rows and each row's 1-based line number.
+
+    Blank lines are skipped (editors and some loggers leave them at the end)
+    but still counted, so line numbers match what an editor shows.
+    """
+    reader = csv.reader(io.StringIO(text))
+    header, header_line = None, None
+    rows, lines = [], []
+    try:
+        for row in reader:
+            if not row:
+                continue
+            if header is None:
+                header, header_line = row, reader.line_num
+                continue
+            rows.append(row)
+            lines.append(reader.line_num)
+    except csv.Error as exc:
+        raise RecordingError(path, f"malformed CSV: {exc}",
+                             line=reader.line_num) from None
+    if header is None:
+        raise RecordingError(path, "file is empty (no header row)")
+    if header_line != 1:
+        # Keep the "header is line 1" promise honest when blank lines lead.
+        raise RecordingError(path, "header row must be the first line",
+                             line=header_line)
+    return header, rows, lines
+
+
+def _check_header(path: str, header: list[str]) -> list[str]:
+    names = [name.strip() for name in header]
+    seen: dict[str, int] = {}
+    for i, name in enumerate(names, start=1):
+        if not name:
+            raise RecordingError(path, f"column {i} has an empty name", line=1)
+        if name in seen:
+            raise RecordingError(
+                path, f"duplicate column name (columns {seen[name]} and {i})",
+                line=1, column=name)
+        seen[name] = i
+    missing = [c for c in REQUIRED_COLUMNS if c not in seen]
+    if missing:
+        raise RecordingError(
+            path, f"missing required column{'s' if len(missing) > 1 else ''} "
+                  f"{', '.join(missing)} (found: {', '.join(names)})", line=1)
+    return names
+
+
+def _check_row_lengths(path, rows, lines, width):
+    for row, line in zip(rows, lines):
+        if len(row) != width:
+            raise RecordingError(
+                path, f"expected {width} fields (as in the header), found {len(row)}",
+                line=line)
+
+
+def _number(cell: str) -> float:
+    # float() also takes Python literal syntax such as '1_000'; in a data
+    # file that is far likelier a typo than a number, and np.loadtxt (the
+    # fast path) rejects it too, so both loaders agree.
+    if "_" in cell:
+        raise ValueError(cell)
+    return float(cell)
+
+
+def _first_bad_cell(cells: Sequence[str]) -> tuple[int, str] | None:
+    """Index and reason of the first cell that is not a finite number."""
+    for i, cell in enumerate(cells):
+        try:
+            value = _number(cell)
+        except ValueError:
+            return i, f"{cell!r} is not a number"
+        if not math.isfinite(value):
+            return i, f"{cell.strip()!r} is not a finite number"
+    return None
+
+
+def _parse_known_columns(path, names, columns, lines) -> dict[str, np.ndarray]:
+    """Convert the contract's columns; report the earliest bad cell in the file."""
+    parsed, problems = {}, []
+    for name in KNOWN_COLUMNS:
+        if name not in names:
+            continue
+        cells = columns[names.index(name)]
+        try:
+            arr = np.fromiter(map(_number, cells), dtype=float, count=len(cells))
+            ok = bool(np.isfinite(arr).all())
+        except ValueError:
+            ok = False
+        if ok:
+            parsed[name] = arr
+        else:
+            # Slow scan only on failure, to locate the exact cell.
+            index, reason = _first_bad_cell(cells)
+            problems.append((index, KNOWN_COLUMNS.index(name), name, reason))
+    if problems:
+        index, _, name, reason = min(problems)
+        raise RecordingError(path, reason, line=lines[index], column=name)
+    return parsed
+
+
+def _parse_extra_column(cells: Sequence[str]) -> np.ndarray:
+    # Extras are "kept and ignored": numbers when they all parse, else text,
+    # but never a reason to reject the file.
+    try:
+        return np.fromiter(map(_number, cells), dtype=float, count=len(cells))
+    except ValueError:
+        return np.array([c.strip() for c in cells], dtype=str)
+
+
+def _check_time(path, time, lines):
+    bad = np.flatnonzero(np.diff(time) <= 0)
+    if bad.size:
+        k = int(bad[0]) + 1
+        raise RecordingError(
+            path, f"time {float(time[k])!r} is not after {float(time[k - 1])!r} on line "
+                  f"{lines[k - 1]} (time must be strictly increasing)",
+            line=lines[k], column="time")
+
+
+def _load_fast(path: str, text: str) -> Recording | None:
+    """Optimistic loader for the common, well-formed, all-numeric file.
+
+    np.loadtxt parses in C, several times faster than csv + float() per
+    cell.  It cannot say which line is wrong, so on any doubt (quotes, text
+    columns, bad values, bad time order, ...) this returns None and the
+    checked loader, which produces every error message, takes over.
+    """
+    first, _, body = text.partition("\n")
+    if '"' in text or not first.strip():
+        return None
+    names = _check_header(path, first.split(","))  # header errors are final
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # loadtxt warns on empty input
+            data = np.loadtxt(io.StringIO(body), delimiter=",", comments=None,
+                              dtype=float, ndmin=2)
+    except ValueError:
+        return None
+    if data.shape[0] < MIN_ROWS or data.shape[1] != len(names):
+        return None
+    columns = dict(zip(names, np.ascontiguousarray(data.T)))
+    known = {name: columns.pop(name) for name in KNOWN_COLUMNS if name in columns}
+    if not all(np.isfinite(a).all() for a in known.values()):
+        return None
+    if not (np.diff(known["time"]) > 0).all():
+        return None
+    return Recording(extra=columns, path=path, **known)
+
+
+def _load_checked(path: str, text: str) -> Recording:
+    """Cell-by-cell loader that pinpoints the first problem in the file."""
+    header, rows, lines = _split_rows(path, text)
+    names = _check_header(path, header)
+    _check_row_lengths(path, rows, lines, len(names))
+    if len(rows) < MIN_ROWS:
+        raise RecordingError(
+            path, f"needs at least {MIN_ROWS} rows of data, found {len(rows)}")
+    columns = list(zip(*rows))
+    known = _parse_known_columns(path, names, columns, lines)
+    _check_time(path, known["time"], lines)
+    extra = {name: _parse_extra_column(columns[i])
+             for i, name in enumerate(names) if name not in KNOWN_COLUMNS}
+    return Recording(extra=extra, path=path, **known)
+
+
+def read_recording(path) -> Recording:
+    """Read a recording CSV; raise RecordingError if it is malformed."""
+    path = os.fspath(path)
+    text = _read_text(path)
+    rec = _load_fast(path, text)
+    return rec if rec is not None else _load_checked(path, text)
+
+
+# --------------------------------------------------------------------------
+# Writing
+
+
+def _format_column(name: str, values) -> list[str]:
+    arr = np.asarray(values)
+    if arr.ndim != 1:
+        raise ValueError(f"column {name!r} must be one-dimensional, got shape {arr.shape}")
+    if arr.dtype.kind in "fiub":
+        # repr of a Python float is the shortest text that reads back to the
+        # identical double: full precision without '%.17g' noise.
+        return [repr(v) for v in arr.astype(float).tolist()]
+    if arr.dtype.kind in "UO":
+        # Text (e.g. a label column) passes through; anything else numeric-
+        # like is converted the same way as floats.
+        return [v if isinstance(v, str) else repr(float(v)) for v in arr.tolist()]
+    raise ValueError(f"column {name!r} has unsupported dtype {arr.dtype}")
+
+
+def _validated_columns(path, columns: Mapping[str, Iterable]) -> dict[str, list[str]]:
+    if not columns:
+        raise ValueError(f"{path}: no columns to write")
+    formatted = {}
+    first = None
+    for name, values in columns.items():
+        if not isinstance(name, str) or not name.strip():
+            raise ValueError(f"{path}: column name {name!r} is not a non-empty string")
+        cells = _format_column(name, values)
+        if first is None:
+            first = (name, len(cells))
+        elif len(cells) != first[1]:
+            raise ValueError(
+                f"{path}: column {name!r} has {len(cells)} values but column "
+                f"{first[0]!r} has {first[1]}; all columns must have the same length")
+        formatted[name] = cells
+    return formatted
+
+
+def write_csv(path, columns: Mapping[str, Iterable]) -> None:
+    """Write named columns as a CSV with full float precision, atomically.
+
+    The data go to a temporary file in the same directory, which then
+    replaces ``path`` in one step: readers never see a half-written file, and
+    on any error neither partial output nor the temporary file is left.
+    """
+    path = os.fspath(path)
+    # Format everything first: most errors surface before touching the disk.
+    formatted = _validated_columns(path, columns)
+    directory = os.path.dirname(os.path.abspath(path))
+    tmp = os.path.join(directory,
+                       f".{os.path.basename(path)}.{secrets.token_hex(6)}.tmp")
+    # O_EXCL: never clobber a stranger's file; 0o666 lets the umask decide
+    # the final permissions, as for a normally created file.
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+    try:
+        with open(fd, "w", newline="", encoding="utf-8") as f:
+            writer = csv.writer(f, lineterminator="\n")
+            writer.writerow(formatted.keys())
+            writer.writerows(zip(*formatted.values()))
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        # BaseException: a Ctrl-C mid-write must not leave the temp file.
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        raise
+
+
+def write_recording(path, rec: Recording) -> None:
+    """Write a Recording in the contract format (extras after the contract columns)."""
+    clash = set(rec.extra) & set(KNOWN_COLUMNS)
+    if clash:
+        raise ValueError(f"{os.fspath(path)}: extra columns {sorted(clash)} "
+                         "clash with contract column names")
+    write_csv(path, rec.columns())

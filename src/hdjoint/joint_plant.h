@@ -1,0 +1,72 @@
+#pragma once
+// The joint itself: motor (eq. 2), harmonic drive compliance (eq. 3-8 with
+// the wave generator carrying tau_f/N), link with inertia, damping, gravity
+// and an external torque, and quantised encoders.
+//
+// Integrator: the linearly implicit Rosenbrock method ROS2 (Verwer et al.
+// 1999; L-stable, second order for any Jacobian) on fixed substeps of at most
+// `max_step`. Why: the torsional resonance (tens of Hz) is resolved with
+// hundreds of substeps per period, and friction laws with a steep slope at
+// zero speed (smoothed Coulomb, and the stiff bristle dynamics of friction
+// models added later) are stiff; an explicit method goes unstable there,
+// ROS2 damps them like the physics does. It needs one 4x4 LU a substep and
+// no Newton iterations, so its cost is fixed and state save/restore exact.
+#include <string>
+#include <vector>
+
+#include "linear_algebra.h"
+#include "parameters.h"
+
+namespace hdjoint {
+
+struct PlantInputs {
+    double i_m = 0.0;      // A
+    double tau_ext = 0.0;  // N.m, in the sense of gravity's mgl*sin(theta_l)
+};
+
+struct PlantOutputs {
+    double theta_m = 0.0;    // motor encoder reading, rad (quantised)
+    double theta_l = 0.0;    // link encoder reading, rad (quantised)
+    double tau_joint = 0.0;  // torque the flexspline transmits, N.m
+    double omega_m = 0.0;    // rad/s
+    double omega_l = 0.0;    // rad/s
+};
+
+// Continuous state: [theta_m, omega_m, theta_l, omega_l].
+using PlantState = Vector<4>;
+
+class JointPlant {
+public:
+    explicit JointPlant(const Parameters& p);
+
+    // Place the joint at rest in static equilibrium at theta_l0 under
+    // gravity and `tau_ext`. False (with a message) when no torque holds it.
+    bool initialize(double tau_ext, std::string* message = nullptr);
+
+    // Advance by h seconds with inputs held. False (with a message) when the
+    // state leaves the model's domain (singular torsion, non-finite state).
+    bool advance(double h, const PlantInputs& in, std::string* message = nullptr);
+
+    PlantOutputs outputs() const;
+    const PlantState& state() const { return x_; }
+    const Parameters& parameters() const { return p_; }
+
+    // Transmitted torque for a state; false outside the model's domain.
+    bool joint_torque(const PlantState& x, double* tau) const;
+
+    std::vector<double> save_state() const;
+    bool load_state(const std::vector<double>& data);
+
+private:
+    // State derivative and its Jacobian (analytic).
+    bool derivative(const PlantState& x, const PlantInputs& in, PlantState* dx, Matrix<4>* J) const;
+    bool ros2_step(double h, const PlantInputs& in, std::string* message);
+
+    Parameters p_;
+    PlantState x_ = PlantState::Zero();
+};
+
+// Encoder reading: whole counts (floor), 0 counts means no quantisation.
+double quantise(double angle, double counts_per_revolution);
+
+}  // namespace hdjoint

@@ -1,0 +1,47 @@
+#include "parameters.h"
+
+#include <cmath>
+#include <cstring>
+#include <sstream>
+
+namespace hdjoint {
+
+namespace {
+const ParameterInfo kTable[] = {
+#define HDJ_PARAMETER(name, unit, def, lo, hi, scope, description) \
+    {#name, unit, def, lo, hi, Scope::scope, description, &Parameters::name},
+#include "parameter_table.def"
+#undef HDJ_PARAMETER
+};
+constexpr std::size_t kCount = sizeof(kTable) / sizeof(kTable[0]);
+}  // namespace
+
+const ParameterInfo* parameter_table() { return kTable; }
+std::size_t parameter_count() { return kCount; }
+
+std::optional<std::size_t> find_parameter(const std::string& name) {
+    for (std::size_t i = 0; i < kCount; ++i)
+        if (name == kTable[i].name) return i;
+    return std::nullopt;
+}
+
+bool in_estimator(Scope s) { return s == Scope::Shared || s == Scope::Estimator; }
+bool in_plant(Scope s) { return s == Scope::Shared || s == Scope::Plant; }
+
+std::optional<std::string> validate(const Parameters& p, bool estimator, bool plant) {
+    for (std::size_t i = 0; i < kCount; ++i) {
+        const ParameterInfo& info = kTable[i];
+        if (!((estimator && in_estimator(info.scope)) || (plant && in_plant(info.scope)))) continue;
+        const double v = p.*(info.member);
+        if (!std::isfinite(v) || v < info.min || v > info.max) {
+            std::ostringstream msg;
+            msg.precision(17);
+            msg << "parameter " << info.name << " = " << v << " is outside its valid range ["
+                << info.min << ", " << info.max << "] " << info.unit;
+            return msg.str();
+        }
+    }
+    return std::nullopt;
+}
+
+}  // namespace hdjoint

@@ -1,0 +1,45 @@
+#pragma once
+// Model parameters, generated from parameter_table.def (the one source of truth).
+#include <cstddef>
+#include <optional>
+#include <string>
+
+namespace hdjoint {
+
+enum class Scope { Shared, Plant, Estimator };
+
+// All parameters as plain data, so instance state can be copied byte-wise.
+struct Parameters {
+#define HDJ_PARAMETER(name, unit, def, lo, hi, scope, description) double name = def;
+#include "parameter_table.def"
+#undef HDJ_PARAMETER
+};
+
+struct ParameterInfo {
+    const char* name;
+    const char* unit;
+    double default_value;
+    double min;
+    double max;
+    Scope scope;
+    const char* description;
+    double Parameters::*member;
+};
+
+// The table, in declaration order; the index is stable and is used as the
+// FMI value reference of each parameter in both FMUs.
+const ParameterInfo* parameter_table();
+std::size_t parameter_count();
+
+// Index of a parameter by name, or nothing.
+std::optional<std::size_t> find_parameter(const std::string& name);
+
+// Whether the parameter belongs to the estimator FMU / the joint FMU.
+bool in_estimator(Scope s);
+bool in_plant(Scope s);
+
+// First problem with a parameter set (name and value), or nothing when the
+// whole set is valid. `scope_filter` checks only parameters the FMU carries.
+std::optional<std::string> validate(const Parameters& p, bool estimator, bool plant);
+
+}  // namespace hdjoint

@@ -1,0 +1,113 @@
+#include "torque_estimator.h"
+
+#include <cmath>
+#include <sstream>
+
+#include "friction.h"
+#include "transmission.h"
+
+namespace hdjoint {
+
+namespace {
+constexpr double kStateVersion = 1.0;
+
+std::string describe_input(const EstimatorInputs& in) {
+    std::ostringstream s;
+    s.precision(17);
+    if (!std::isfinite(in.i_m)) s << "input i_m = " << in.i_m << " is not finite";
+    else if (!std::isfinite(in.theta_m)) s << "input theta_m = " << in.theta_m << " is not finite";
+    else s << "input theta_l = " << in.theta_l << " is not finite";
+    return s.str();
+}
+}  // namespace
+
+TorqueEstimator::TorqueEstimator(const Parameters& p)
+    : p_(p), system_(p, p.Ts), measurement_(p) {
+    Q_.diagonal() << p.ukf_q_omega * p.ukf_q_omega, p.ukf_q_tau * p.ukf_q_tau;
+    R_.diagonal() << p.ukf_r_omega * p.ukf_r_omega, p.ukf_r_torsion * p.ukf_r_torsion;
+    Matrix<2> P0 = Matrix<2>::Zero();
+    P0.diagonal() << p.ukf_p0_omega * p.ukf_p0_omega, p.ukf_p0_tau * p.ukf_p0_tau;
+    ukf_ = UnscentedKalmanFilter<2>(merwe_weights<2>(p.ukf_alpha, p.ukf_beta, p.ukf_kappa),
+                                    Vector<2>::Zero(), P0);
+}
+
+EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* message) {
+    if (!std::isfinite(in.i_m) || !std::isfinite(in.theta_m) || !std::isfinite(in.theta_l)) {
+        if (message) *message = describe_input(in);
+        return EstimatorStatus::InvalidInput;
+    }
+    const ComplianceEstimate c = compliance_estimate(in.i_m, in.theta_m, in.theta_l, p_);
+    if (!c.valid) {
+        if (message) {
+            std::ostringstream s;
+            s.precision(17);
+            s << "singular torsion: dtheta_f = " << c.dtheta_f << " rad gives |Cf*Kf*dtheta_f| = "
+              << std::fabs(p_.Cf * p_.Kf * c.dtheta_f)
+              << " >= pi/2 (theta_m = " << in.theta_m << ", theta_l = " << in.theta_l
+              << "); check N, a0 (encoder offsets), Kf and Cf";
+            *message = s.str();
+        }
+        return EstimatorStatus::SingularTorsion;
+    }
+
+    FilterStatus predicted = FilterStatus::Ok;
+    double speed = 0.0;  // the first sample has no previous angle: speed 0
+    if (samples_ == 0) {
+        ukf_.state() << 0.0, c.tau;
+        ukf_.covariance() = ukf_.initial_covariance();
+    } else {
+        predicted = ukf_.predict(system_, previous_u_, Q_);
+        speed = (in.theta_m - previous_theta_m_) / p_.Ts;
+    }
+    Vector<2> z;
+    z << speed, c.dtheta_f;
+    const auto update = ukf_.update(measurement_, z, R_);
+
+    const Vector<2>& x = ukf_.state();
+    out_.tau_ukf = x(1);
+    out_.omega_m = x(0);
+    out_.tau_ukf_std = std::sqrt(std::max(ukf_.covariance()(1, 1), 0.0));
+    out_.tau_compliance = c.tau;
+    out_.dtheta_f = c.dtheta_f;
+    out_.nis = update.nis;
+    previous_theta_m_ = in.theta_m;
+    previous_u_ = p_.Kt * in.i_m - coulomb_friction(x(0), p_);
+    ++samples_;
+
+    // Report the worst thing the filter had to do on this sample.
+    const FilterStatus worst = std::max(predicted, update.status);
+    switch (worst) {
+        case FilterStatus::Ok: return EstimatorStatus::Ok;
+        case FilterStatus::CovarianceRepaired:
+            if (message) *message = "UKF covariance was not positive definite; repaired with diagonal jitter";
+            return EstimatorStatus::CovarianceRepaired;
+        case FilterStatus::CovarianceReset:
+            if (message) *message = "UKF covariance could not be factorised; reset to the initial covariance";
+            return EstimatorStatus::CovarianceReset;
+        case FilterStatus::UpdateSkipped:
+            if (message) *message = "UKF innovation covariance is singular; measurement update skipped";
+            return EstimatorStatus::UpdateSkipped;
+    }
+    return EstimatorStatus::Ok;
+}
+
+std::vector<double> TorqueEstimator::save_state() const {
+    const Vector<2>& x = ukf_.state();
+    const Matrix<2>& P = ukf_.covariance();
+    return {kStateVersion, x(0), x(1), P(0, 0), P(0, 1), P(1, 0), P(1, 1),
+            out_.tau_ukf, out_.tau_compliance, out_.omega_m, out_.dtheta_f, out_.tau_ukf_std, out_.nis,
+            previous_theta_m_, previous_u_, static_cast<double>(samples_)};
+}
+
+bool TorqueEstimator::load_state(const std::vector<double>& d) {
+    if (d.size() != 16 || d[0] != kStateVersion) return false;
+    ukf_.state() << d[1], d[2];
+    ukf_.covariance() << d[3], d[4], d[5], d[6];
+    out_ = {d[7], d[8], d[9], d[10], d[11], d[12]};
+    previous_theta_m_ = d[13];
+    previous_u_ = d[14];
+    samples_ = static_cast<long>(d[15]);
+    return true;
+}
+
+}  // namespace hdjoint

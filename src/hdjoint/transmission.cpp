@@ -1,0 +1,112 @@
+#include "transmission.h"
+
+#include <cmath>
+
+namespace hdjoint {
+
+namespace {
+constexpr double kHalfPi = 1.5707963267948966;
+// Below this the atan/exp laws are replaced by their linear limits.
+constexpr double kLinearLimit = 1e-12;
+
+double sign(double x) { return (x > 0.0) - (x < 0.0); }
+}  // namespace
+
+double total_torsion(double theta_m, double theta_l, const Parameters& p) {
+    return theta_m / p.N - theta_l;
+}
+
+double kinematic_error(double theta_m, double theta_l, const Parameters& p) {
+    const double l = p.omega_l * theta_l;
+    const double w = p.omega_w * theta_m;
+    return p.a0 + p.al1 * std::cos(l) + p.bl1 * std::sin(l) + p.aw1 * std::cos(w) +
+           p.bw1 * std::sin(w) + p.aw2 * std::cos(2.0 * w) + p.bw2 * std::sin(2.0 * w);
+}
+
+void kinematic_error_gradient(double theta_m, double theta_l, const Parameters& p, double* d_theta_m,
+                              double* d_theta_l) {
+    const double l = p.omega_l * theta_l;
+    const double w = p.omega_w * theta_m;
+    *d_theta_l = p.omega_l * (-p.al1 * std::sin(l) + p.bl1 * std::cos(l));
+    *d_theta_m = p.omega_w * (-p.aw1 * std::sin(w) + p.bw1 * std::cos(w) +
+                              2.0 * (-p.aw2 * std::sin(2.0 * w) + p.bw2 * std::cos(2.0 * w)));
+}
+
+double wave_generator_torsion(double tau_w, const Parameters& p) {
+    if (p.Cw < kLinearLimit) return tau_w / (p.N * p.Kw);
+    return sign(tau_w) / (p.Cw * p.N * p.Kw) * (-std::expm1(-p.Cw * std::fabs(tau_w)));
+}
+
+double wave_generator_compliance(double tau_w, const Parameters& p) {
+    if (p.Cw < kLinearLimit) return 1.0 / (p.N * p.Kw);
+    return std::exp(-p.Cw * std::fabs(tau_w)) / (p.N * p.Kw);
+}
+
+double flexspline_compliance(double tau_f, const Parameters& p) {
+    const double c = p.Cf * tau_f;
+    return 1.0 / (p.Kf * (1.0 + c * c));
+}
+
+bool flexspline_torque(double dtheta_f, const Parameters& p, double* tau_f) {
+    if (p.Cf < kLinearLimit) {
+        *tau_f = p.Kf * dtheta_f;
+        return std::isfinite(*tau_f);
+    }
+    const double arg = p.Cf * p.Kf * dtheta_f;
+    if (!(std::fabs(arg) < kHalfPi)) return false;
+    *tau_f = std::tan(arg) / p.Cf;
+    return std::isfinite(*tau_f);
+}
+
+ComplianceEstimate compliance_estimate(double i_m, double theta_m, double theta_l, const Parameters& p) {
+    ComplianceEstimate e;
+    e.dtheta_f = total_torsion(theta_m, theta_l, p) - wave_generator_torsion(p.Kt * i_m, p) -
+                 kinematic_error(theta_m, theta_l, p);
+    e.valid = flexspline_torque(e.dtheta_f, p, &e.tau);
+    return e;
+}
+
+bool transmitted_torque(double elastic_torsion, const Parameters& p, double* tau) {
+    const double y = elastic_torsion;
+    auto residual = [&](double t) { return flexspline_torsion(t, p) + wave_generator_torsion(t / p.N, p) - y; };
+    // Bracket: the residual is odd-symmetric in shape and increasing; a
+    // torque reaching the asymptote cannot be exceeded.
+    double lo = 0.0, hi = 0.0;
+    if (y > 0.0) {
+        hi = 1.0;
+        while (residual(hi) < 0.0) {
+            hi *= 2.0;
+            if (hi > 1e12) return false;
+        }
+    } else if (y < 0.0) {
+        lo = -1.0;
+        while (residual(lo) > 0.0) {
+            lo *= 2.0;
+            if (lo < -1e12) return false;
+        }
+    } else {
+        *tau = 0.0;
+        return true;
+    }
+    // Newton from the flexspline-only guess, falling back to bisection
+    // whenever a step leaves the bracket.
+    double t = 0.0;
+    if (!flexspline_torque(y, p, &t) || t <= lo || t >= hi) t = 0.5 * (lo + hi);
+    for (int it = 0; it < 200; ++it) {
+        const double r = residual(t);
+        if (r == 0.0) break;
+        if (r > 0.0) hi = t; else lo = t;
+        const double slope = flexspline_compliance(t, p) + wave_generator_compliance(t / p.N, p) / p.N;
+        double next = t - r / slope;
+        if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+        if (std::fabs(next - t) <= 1e-15 * (1.0 + std::fabs(t))) {
+            t = next;
+            break;
+        }
+        t = next;
+    }
+    *tau = t;
+    return std::isfinite(t);
+}
+
+}  // namespace hdjoint

@@ -1,0 +1,118 @@
+#pragma once
+// A fixed-size Unscented Kalman Filter, eq. (9)-(31), generic over its system
+// and measurement models (types with f(x, u) and h(x)).
+//
+// Safeguards the paper leaves out: sigma points are redrawn from the
+// predicted covariance before the update (eq. 22-24), covariances are kept
+// symmetric, an indefinite covariance is repaired (or reset to the initial
+// one) and reported as a status instead of aborting, and the gain comes from
+// a solve, never an explicit inverse.
+#include "sigma_points.h"
+
+namespace hdjoint {
+
+enum class FilterStatus {
+    Ok,
+    CovarianceRepaired,  // jitter was added to keep P positive definite
+    CovarianceReset,     // P could not be factorised and was reset to P0
+    UpdateSkipped,       // innovation covariance singular: measurement ignored
+};
+
+template <int NX>
+class UnscentedKalmanFilter {
+public:
+    using State = Vector<NX>;
+    using Covariance = Matrix<NX>;
+
+    UnscentedKalmanFilter() = default;
+    UnscentedKalmanFilter(const SigmaWeights<NX>& weights, const State& x0, const Covariance& P0)
+        : weights_(weights), x_(x0), P_(P0), P0_(P0) {}
+
+    const State& state() const { return x_; }
+    const Covariance& covariance() const { return P_; }
+    State& state() { return x_; }
+    Covariance& covariance() { return P_; }
+    const Covariance& initial_covariance() const { return P0_; }
+
+    // eq. (16)-(21)
+    template <class System>
+    FilterStatus predict(const System& system, const typename System::Control& u, const Covariance& Q) {
+        SigmaPoints<NX> chi;
+        const FilterStatus drawn = draw(&chi);
+        for (int i = 0; i < chi.cols(); ++i) chi.col(i) = system.f(chi.col(i), u);
+        unscented_transform<NX, 2 * NX + 1>(chi, weights_.mean, weights_.covariance, &x_, &P_);
+        P_ += Q;
+        symmetrize(&P_);
+        return drawn;
+    }
+
+    // What an update saw: the innovation, its covariance and the normalised
+    // innovation squared (NIS), which residual analysis needs.
+    template <int NZ>
+    struct Update {
+        FilterStatus status = FilterStatus::Ok;
+        Vector<NZ> innovation = Vector<NZ>::Zero();
+        Matrix<NZ> innovation_covariance = Matrix<NZ>::Zero();
+        double nis = 0.0;
+    };
+
+    // eq. (22)-(31).
+    template <class Measurement>
+    Update<Measurement::kSize> update(const Measurement& model, const typename Measurement::Vector& z,
+                        const typename Measurement::Covariance& R) {
+        constexpr int NZ = Measurement::kSize;
+        Update<NZ> result;
+        SigmaPoints<NX> chi;
+        result.status = draw(&chi);
+        Eigen::Matrix<double, NZ, 2 * NX + 1> zeta;
+        for (int i = 0; i < chi.cols(); ++i) zeta.col(i) = model.h(chi.col(i));
+        Vector<NZ> z_hat;
+        Matrix<NZ> Pzz;
+        unscented_transform<NZ, 2 * NX + 1>(zeta, weights_.mean, weights_.covariance, &z_hat, &Pzz);
+        Pzz += R;
+        symmetrize(&Pzz);
+        const Eigen::Matrix<double, NX, NZ> Pxz =
+            (chi.colwise() - x_) * weights_.covariance.asDiagonal() * (zeta.colwise() - z_hat).transpose();
+        result.innovation = z - z_hat;
+        result.innovation_covariance = Pzz;
+        Eigen::LLT<Matrix<NZ>> llt(Pzz);
+        if (llt.info() != Eigen::Success || !Pzz.allFinite() || !result.innovation.allFinite()) {
+            result.status = FilterStatus::UpdateSkipped;
+            return result;
+        }
+        // K = Pxz Pzz^-1, taken as the transpose of Pzz^-1 Pxz^T.
+        const Eigen::Matrix<double, NX, NZ> K = llt.solve(Pxz.transpose()).transpose();
+        x_ += K * result.innovation;
+        P_ -= K * Pzz * K.transpose();
+        symmetrize(&P_);
+        result.nis = result.innovation.dot(llt.solve(result.innovation));
+        return result;
+    }
+
+private:
+    // Sigma points from the current mean and covariance, repairing or
+    // resetting P when it cannot be factorised.
+    FilterStatus draw(SigmaPoints<NX>* chi) {
+        Covariance L;
+        FilterStatus status = FilterStatus::Ok;
+        switch (robust_cholesky<NX>(&P_, &L)) {
+            case FactorStatus::Ok: break;
+            case FactorStatus::Repaired: status = FilterStatus::CovarianceRepaired; break;
+            case FactorStatus::Failed:
+                P_ = P0_;
+                robust_cholesky<NX>(&P_, &L);
+                if (!x_.allFinite()) x_.setZero();
+                status = FilterStatus::CovarianceReset;
+                break;
+        }
+        *chi = sigma_points<NX>(x_, L, weights_.gamma);
+        return status;
+    }
+
+    SigmaWeights<NX> weights_;
+    State x_ = State::Zero();
+    Covariance P_ = Covariance::Identity();
+    Covariance P0_ = Covariance::Identity();
+};
+
+}  // namespace hdjoint
