@@ -1,0 +1,185 @@
+// hdjoint._core: the batch path to the C++ core, for work that runs the model
+// many times (estimation over recordings, diagnosis). Same code as the FMUs.
+#include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+#include <nanobind/stl/map.h>
+#include <nanobind/stl/string.h>
+#include <nanobind/stl/vector.h>
+
+#include <cmath>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "hdjoint/joint_plant.h"
+#include "hdjoint/parameters.h"
+#include "hdjoint/torque_estimator.h"
+#include "hdjoint/transmission.h"
+
+namespace nb = nanobind;
+using namespace hdjoint;
+
+namespace {
+
+using Array = nb::ndarray<const double, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
+using OutArray = nb::ndarray<nb::numpy, double, nb::ndim<1>>;
+
+// A parameter set from a dict of name -> value; unknown names are errors.
+Parameters parameters_from(const std::map<std::string, double>& values, bool estimator, bool plant) {
+    Parameters p;
+    for (const auto& [name, value] : values) {
+        const auto index = find_parameter(name);
+        if (!index) throw std::invalid_argument("unknown parameter '" + name + "'");
+        p.*(parameter_table()[*index].member) = value;
+    }
+    if (auto problem = validate(p, estimator, plant)) throw std::invalid_argument(*problem);
+    return p;
+}
+
+OutArray make_array(std::vector<double>&& data) {
+    auto* owned = new std::vector<double>(std::move(data));
+    nb::capsule owner(owned, [](void* v) noexcept { delete static_cast<std::vector<double>*>(v); });
+    return OutArray(owned->data(), {owned->size()}, owner);
+}
+
+void check_lengths(std::size_t n, std::initializer_list<std::size_t> sizes) {
+    for (std::size_t s : sizes)
+        if (s != n) throw std::invalid_argument("input arrays must all have the same length");
+    if (n < 1) throw std::invalid_argument("input arrays are empty");
+}
+
+// The estimator over a recording, with the FMU's timing: row j is a
+// communication point; its step [t_j, t_j+1) runs the samples start + k*Ts
+// inside it on row j's inputs, and row j's outputs are those after the step
+// (the last row steps by Ts).
+std::map<std::string, OutArray> run_estimator(const std::map<std::string, double>& values, Array time, Array i_m,
+                                              Array theta_m, Array theta_l) {
+    const std::size_t n = time.shape(0);
+    check_lengths(n, {i_m.shape(0), theta_m.shape(0), theta_l.shape(0)});
+    const Parameters p = parameters_from(values, true, false);
+    TorqueEstimator estimator(p);
+    std::vector<double> tau_ukf(n), tau_c(n), omega(n), dtheta_f(n), std_ukf(n), nis(n), status(n);
+    const double t0 = time(0), tolerance = 1e-6 * p.Ts;
+    long next = 0;
+    {
+        nb::gil_scoped_release release;
+        for (std::size_t j = 0; j < n; ++j) {
+            const double end = j + 1 < n ? time(j + 1) : time(j) + p.Ts;
+            const EstimatorInputs in{i_m(j), theta_m(j), theta_l(j)};
+            int worst = 0;
+            while (t0 + static_cast<double>(next) * p.Ts < end - tolerance) {
+                std::string message;
+                const EstimatorStatus s = estimator.step(in, &message);
+                if (!recoverable(s)) {
+                    nb::gil_scoped_acquire acquire;
+                    throw std::runtime_error("row " + std::to_string(j) + " (time " + std::to_string(time(j)) +
+                                             " s): " + message);
+                }
+                worst = std::max(worst, static_cast<int>(s));
+                ++next;
+            }
+            const EstimatorOutputs& o = estimator.outputs();
+            tau_ukf[j] = o.tau_ukf;
+            tau_c[j] = o.tau_compliance;
+            omega[j] = o.omega_m;
+            dtheta_f[j] = o.dtheta_f;
+            std_ukf[j] = o.tau_ukf_std;
+            nis[j] = o.nis;
+            status[j] = worst;
+        }
+    }
+    std::map<std::string, OutArray> out;
+    out.emplace("tau_ukf", make_array(std::move(tau_ukf)));
+    out.emplace("tau_compliance", make_array(std::move(tau_c)));
+    out.emplace("omega_m", make_array(std::move(omega)));
+    out.emplace("dtheta_f", make_array(std::move(dtheta_f)));
+    out.emplace("tau_ukf_std", make_array(std::move(std_ukf)));
+    out.emplace("nis", make_array(std::move(nis)));
+    out.emplace("status", make_array(std::move(status)));
+    return out;
+}
+
+// The compliance model, eq. (3)-(8), vectorised; NaN where the torsion is singular.
+std::map<std::string, OutArray> compliance(const std::map<std::string, double>& values, Array i_m, Array theta_m,
+                                           Array theta_l) {
+    const std::size_t n = i_m.shape(0);
+    check_lengths(n, {theta_m.shape(0), theta_l.shape(0)});
+    const Parameters p = parameters_from(values, true, false);
+    std::vector<double> tau(n), dtheta_f(n);
+    for (std::size_t j = 0; j < n; ++j) {
+        const ComplianceEstimate c = compliance_estimate(i_m(j), theta_m(j), theta_l(j), p);
+        tau[j] = c.valid ? c.tau : std::nan("");
+        dtheta_f[j] = c.dtheta_f;
+    }
+    std::map<std::string, OutArray> out;
+    out.emplace("tau_compliance", make_array(std::move(tau)));
+    out.emplace("dtheta_f", make_array(std::move(dtheta_f)));
+    return out;
+}
+
+// The joint, open loop: inputs held over [t_j, t_j+1); outputs at every t_j
+// (row 0 is the initial equilibrium).
+std::map<std::string, OutArray> simulate_joint(const std::map<std::string, double>& values, Array time, Array i_m,
+                                               Array tau_ext) {
+    const std::size_t n = time.shape(0);
+    check_lengths(n, {i_m.shape(0), tau_ext.shape(0)});
+    const Parameters p = parameters_from(values, false, true);
+    JointPlant plant(p);
+    std::string message;
+    if (!plant.initialize(tau_ext(0), &message)) throw std::runtime_error(message);
+    std::vector<double> theta_m(n), theta_l(n), tau(n), omega_m(n), omega_l(n);
+    {
+        nb::gil_scoped_release release;
+        for (std::size_t j = 0; j < n; ++j) {
+            if (j > 0 && !plant.advance(time(j) - time(j - 1), {i_m(j - 1), tau_ext(j - 1)}, &message)) {
+                nb::gil_scoped_acquire acquire;
+                throw std::runtime_error("row " + std::to_string(j) + ": " + message);
+            }
+            const PlantOutputs o = plant.outputs();
+            theta_m[j] = o.theta_m;
+            theta_l[j] = o.theta_l;
+            tau[j] = o.tau_joint;
+            omega_m[j] = o.omega_m;
+            omega_l[j] = o.omega_l;
+        }
+    }
+    std::map<std::string, OutArray> out;
+    out.emplace("theta_m", make_array(std::move(theta_m)));
+    out.emplace("theta_l", make_array(std::move(theta_l)));
+    out.emplace("tau_joint", make_array(std::move(tau)));
+    out.emplace("omega_m", make_array(std::move(omega_m)));
+    out.emplace("omega_link", make_array(std::move(omega_l)));
+    return out;
+}
+
+nb::list table() {
+    nb::list rows;
+    for (std::size_t i = 0; i < parameter_count(); ++i) {
+        const ParameterInfo& p = parameter_table()[i];
+        nb::dict row;
+        row["name"] = p.name;
+        row["unit"] = p.unit;
+        row["default"] = p.default_value;
+        row["min"] = p.min;
+        row["max"] = p.max;
+        row["scope"] = p.scope == Scope::Shared ? "shared" : p.scope == Scope::Plant ? "plant" : "estimator";
+        row["description"] = p.description;
+        row["value_reference"] = i;
+        rows.append(row);
+    }
+    return rows;
+}
+
+}  // namespace
+
+NB_MODULE(_core, m) {
+    m.doc() = "hdjoint C++ core: the batch path (same code as the FMUs)";
+    m.def("parameter_table", &table, "The parameter table (name, unit, default, range, scope, description).");
+    m.def("run_estimator", &run_estimator, nb::arg("params"), nb::arg("time"), nb::arg("i_m"), nb::arg("theta_m"),
+          nb::arg("theta_l"), "Compliance model and paper UKF over a recording, with the FMU's sampling.");
+    m.def("compliance", &compliance, nb::arg("params"), nb::arg("i_m"), nb::arg("theta_m"), nb::arg("theta_l"),
+          "The compliance model, eq. (3)-(8), per sample.");
+    m.def("simulate_joint", &simulate_joint, nb::arg("params"), nb::arg("time"), nb::arg("i_m"), nb::arg("tau_ext"),
+          "The joint, open loop, with inputs held between rows.");
+}

@@ -1,0 +1,143 @@
+"""The `hdjoint` command line. Exit code 0 on success; otherwise a one-line
+reason on stderr and a non-zero code (2: bad input, 1: failure while running).
+Heavy modules are imported inside the subcommands, so `hdjoint --help` is quick."""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+
+class UserError(Exception):
+    """Bad input from the user: reported in one line, exit code 2."""
+
+
+def _params(path):
+    from . import parameters
+    try:
+        return parameters.load(path)
+    except parameters.ParameterError as e:
+        raise UserError(str(e)) from None
+
+
+def _read(path):
+    from .recording import RecordingError, read_recording
+    try:
+        return read_recording(path)
+    except RecordingError as e:
+        raise UserError(str(e)) from None
+
+
+def cmd_fmus(args) -> int:
+    from .fmus import export_fmus
+    for path in export_fmus(args.out):
+        print(path)
+    return 0
+
+
+def cmd_simulate(args) -> int:
+    from . import experiments
+    from .recording import write_recording
+    nominal = _params(args.params)
+    joint = _params(args.joint) if args.joint else experiments.true_joint_parameters(nominal)
+    rec = experiments.run(args.experiment, joint=joint, nominal=nominal, duration=args.duration,
+                          sensors=experiments.Sensors(seed=args.seed))
+    write_recording(args.output, rec)
+    print(f"{args.output}: {len(rec)} samples, {rec.duration:.3f} s ({args.experiment})")
+    return 0
+
+
+def _estimator_params(args, rec):
+    """The parameter set, with Ts taken from the recording when the file does not set it."""
+    import json
+    params = _params(args.params)
+    given = json.loads(Path(args.params).read_text()) if args.params else {}
+    if "Ts" not in given:
+        params["Ts"] = float(f"{rec.median_step:.6g}")
+        if abs(params["Ts"] - 1e-3) > 1e-9:
+            print(f"note: estimator sample period Ts = {params['Ts']:g} s (the recording's median step)",
+                  file=sys.stderr)
+    return params
+
+
+def cmd_estimate(args) -> int:
+    from . import parameters
+    from .metrics import error_figures
+    from .recording import write_csv
+    rec = _read(args.recording)
+    params = parameters.for_estimator(_estimator_params(args, rec))
+    if args.engine == "fmu":
+        from .fmu_runner import FmuError, run_estimator_fmu
+        try:
+            est = run_estimator_fmu(rec.time, rec.i_m, rec.theta_m, rec.theta_l, params)
+        except FmuError as e:
+            raise UserError(f"{args.recording}: {e}") from None
+    else:
+        from . import _core
+        try:
+            est = _core.run_estimator(params, rec.time, rec.i_m, rec.theta_m, rec.theta_l)
+        except RuntimeError as e:
+            raise UserError(f"{args.recording}: {e}") from None
+        est.pop("status")
+        est.pop("nis")
+    write_csv(args.output, {"time": rec.time, **est})
+    if rec.tau_sensor is not None:
+        print(f"{'estimate':<16} {'RMS error':>10} {'max error':>10}   (N.m, against tau_sensor)")
+        for name in ("tau_compliance", "tau_ukf"):
+            fig = error_figures(est[name], rec.tau_sensor)
+            print(f"{name:<16} {fig.rms:>10.4f} {fig.max:>10.4f}")
+    return 0
+
+
+def cmd_demo(args) -> int:
+    from .demo import run_demo
+    run_demo(Path(args.out))
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="hdjoint", description=__doc__.splitlines()[0])
+    sub = ap.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("fmus", help="write every FMU the project builds into a directory")
+    p.add_argument("--out", required=True, help="target directory")
+    p.set_defaults(run=cmd_fmus)
+
+    p = sub.add_parser("simulate", help="run the joint FMU on a built-in experiment, write a recording")
+    p.add_argument("--experiment", default="paper", help="built-in experiment (default: paper)")
+    p.add_argument("--params", help="nominal parameter set (JSON) the controller assumes")
+    p.add_argument("--joint", help="parameter set (JSON) of the simulated joint "
+                                   "(default: the nominal set with realistic deviations)")
+    p.add_argument("--duration", type=float, help="seconds (default: the experiment's)")
+    p.add_argument("--seed", type=int, default=1, help="seed of the sensor noise")
+    p.add_argument("-o", "--output", required=True, help="recording to write (CSV)")
+    p.set_defaults(run=cmd_simulate)
+
+    p = sub.add_parser("estimate", help="torque estimates on a recording")
+    p.add_argument("recording")
+    p.add_argument("--params", help="parameter set (JSON)")
+    p.add_argument("--engine", choices=("fmu", "batch"), default="fmu",
+                   help="run JointTorqueEstimator.fmu through fmpy (default) or the native batch path")
+    p.add_argument("-o", "--output", required=True, help="estimates to write (CSV)")
+    p.set_defaults(run=cmd_estimate)
+
+    p = sub.add_parser("demo", help="the main job on built-in data: FMUs, estimation, paper table, report")
+    p.add_argument("--out", default="hdjoint-demo", help="output directory (default: hdjoint-demo)")
+    p.set_defaults(run=cmd_demo)
+    return ap
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.run(args)
+    except UserError as e:
+        print(f"hdjoint {args.command}: {e}", file=sys.stderr)
+        return 2
+    except (OSError, RuntimeError, ValueError) as e:
+        print(f"hdjoint {args.command}: {e}", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

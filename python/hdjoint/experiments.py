@@ -1,0 +1,142 @@
+"""Built-in experiments: the joint (HarmonicDriveJoint.fmu, through fmpy)
+under a position controller, recorded in the contract's format.
+
+The joint that is simulated is not the nominal one: real joints differ from
+their catalogue model by a few percent in every parameter and by more in the
+kinematic error. `TRUE_JOINT_DEVIATIONS` says how the simulated joint differs
+from the defaults that the estimator assumes, so the reported errors are the
+systematic ones a user meets, not only noise.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from . import parameters
+from .fmu_runner import FmuInstance
+from .fmus import fmu_path
+from .recording import Recording
+
+# How the simulated ("true") joint differs from the nominal parameter set.
+TRUE_JOINT_DEVIATIONS = {
+    "Kt": 1.03,      # torque constant 3 % above its data-sheet value
+    "Kf": 0.95,      # flexspline 5 % softer
+    "Cf": 1.10,
+    "Fc": 1.30,      # more friction than assumed
+    "al1": 1.35,     # kinematic error differs from the nominal fit
+    "bl1": 0.60,
+    "aw1": 1.25,
+    "bw1": 1.20,
+    "aw2": 0.80,
+    "bw2": 1.50,
+}
+TRUE_JOINT_EXTRA = {"Df": 3.0}  # structural damping of the flexspline
+
+
+def true_joint_parameters(nominal: dict[str, float] | None = None) -> dict[str, float]:
+    p = dict(nominal or parameters.defaults())
+    for name, factor in TRUE_JOINT_DEVIATIONS.items():
+        p[name] *= factor
+    p.update(TRUE_JOINT_EXTRA)
+    return p
+
+
+@dataclass
+class Sensors:
+    """Measurement noise added to what the recording holds (encoders are quantised by the FMU)."""
+    current_noise: float = 0.01   # A, std of the current measurement
+    torque_noise: float = 0.02    # N.m, std of the torque sensor
+    seed: int = 1
+
+
+@dataclass
+class Controller:
+    """Link position PD on the motor encoder with nominal gravity feed-forward."""
+    kp: float = 2.0        # A per motor rad
+    kd: float = 0.06       # A per motor rad/s
+    speed_filter_hz: float = 150.0
+    i_max: float = 4.0     # A
+
+
+@dataclass
+class Experiment:
+    name: str
+    duration: float
+    reference: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]  # t -> (theta_l_ref, omega_l_ref)
+    description: str
+    tau_ext: Callable[[np.ndarray], np.ndarray] = field(default=lambda t: np.zeros_like(t))
+
+
+def _paper_reference(t):
+    # 58 s sinusoid whose amplitude grows, so the gravity torque grows
+    # gradually to about 5 N.m (the paper's test torque).
+    amplitude = 0.05 + 1.15 * t / 58.0
+    w = 2.0 * math.pi * 0.25
+    theta = amplitude * np.sin(w * t)
+    omega = amplitude * w * np.cos(w * t) + (1.15 / 58.0) * np.sin(w * t)
+    return theta, omega
+
+
+EXPERIMENTS = {
+    "paper": Experiment(
+        "paper", 58.0, _paper_reference,
+        "Yu et al. 2018, section IV: 58 s sinusoid with gradually growing torque, 1 kHz, "
+        "1024-line motor encoder in quadrature, 19-bit link encoder, sensor noise"),
+}
+
+
+def run(name: str = "paper", joint: dict[str, float] | None = None, nominal: dict[str, float] | None = None,
+        sample_time: float = 1e-3, sensors: Sensors | None = None, controller: Controller | None = None,
+        duration: float | None = None) -> Recording:
+    """Simulate a built-in experiment; returns the recording.
+
+    `joint` is the simulated joint's parameter set (default: the nominal set
+    with TRUE_JOINT_DEVIATIONS); `nominal` what the controller assumes.
+    The recording holds the contract columns plus `tau_joint` (the true
+    transmitted torque) and `i_cmd` (the current actually applied).
+    """
+    if name not in EXPERIMENTS:
+        raise ValueError(f"unknown experiment '{name}'; known: {', '.join(EXPERIMENTS)}")
+    exp = EXPERIMENTS[name]
+    nominal = nominal or parameters.defaults()
+    joint = joint or true_joint_parameters(nominal)
+    sensors = sensors or Sensors()
+    ctl = controller or Controller()
+    n = int(round((duration or exp.duration) / sample_time)) + 1
+    t = np.arange(n) * sample_time
+    theta_ref, omega_ref = exp.reference(t)
+    tau_ext = exp.tau_ext(t)
+    N, Kt, mgl = nominal["N"], nominal["Kt"], joint_gravity_guess(nominal)
+
+    out = np.empty((n, 3))
+    i_cmd = np.empty(n)
+    alpha = 1.0 - math.exp(-2.0 * math.pi * ctl.speed_filter_hz * sample_time)
+    with FmuInstance(fmu_path("HarmonicDriveJoint"), "joint") as plant:
+        plant.start(0.0, None, parameters.for_plant(joint), {"i_m": 0.0, "tau_ext": float(tau_ext[0])})
+        stepper = plant.stepper(("i_m", "tau_ext"), ("theta_m", "theta_l", "tau_joint"))
+        out[0] = plant.get(("theta_m", "theta_l", "tau_joint"))
+        theta_m0 = out[0, 0]
+        previous, speed = theta_m0, 0.0
+        for j in range(n):
+            theta_m = out[j, 0]
+            speed += alpha * ((theta_m - previous) / sample_time - speed)
+            previous = theta_m
+            error = N * theta_ref[j] - (theta_m - theta_m0)
+            i = ctl.kp * error + ctl.kd * (N * omega_ref[j] - speed) + mgl * math.sin(theta_ref[j]) / (N * Kt)
+            i_cmd[j] = min(max(i, -ctl.i_max), ctl.i_max)
+            if j + 1 < n:
+                out[j + 1] = stepper.step(t[j], sample_time, (i_cmd[j], tau_ext[j]))
+
+    rng = np.random.default_rng(sensors.seed)
+    return Recording(
+        time=t, i_m=i_cmd + rng.normal(0.0, sensors.current_noise, n), theta_m=out[:, 0], theta_l=out[:, 1],
+        tau_sensor=out[:, 2] + rng.normal(0.0, sensors.torque_noise, n),
+        extra={"tau_joint": out[:, 2].copy(), "i_cmd": i_cmd}, path=None)
+
+
+def joint_gravity_guess(nominal: dict[str, float]) -> float:
+    """The gravity torque amplitude the controller feeds forward (its nominal mgl)."""
+    return nominal.get("mgl", parameters.table()["mgl"].default)

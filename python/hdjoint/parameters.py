@@ -1,0 +1,132 @@
+"""Parameter sets: the table (from the C++ core, the one source of truth),
+defaults, and JSON / SSP (.ssv) files in the contract's format."""
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from xml.sax.saxutils import quoteattr
+
+from . import _core
+
+
+class ParameterError(ValueError):
+    """A parameter set that names an unknown parameter or a bad value."""
+
+
+@dataclass(frozen=True)
+class ParameterInfo:
+    name: str
+    unit: str
+    default: float
+    min: float
+    max: float
+    scope: str  # "shared", "plant" or "estimator"
+    description: str
+    value_reference: int
+
+    def in_estimator(self) -> bool:
+        return self.scope in ("shared", "estimator")
+
+    def in_plant(self) -> bool:
+        return self.scope in ("shared", "plant")
+
+
+@lru_cache(maxsize=1)
+def table() -> dict[str, ParameterInfo]:
+    """Every parameter by name, in the table's order."""
+    return {row["name"]: ParameterInfo(**row) for row in _core.parameter_table()}
+
+
+def defaults(scope: str = "all") -> dict[str, float]:
+    """Default values for 'all', 'estimator' or 'plant'."""
+    pick = {
+        "all": lambda p: True,
+        "estimator": ParameterInfo.in_estimator,
+        "plant": ParameterInfo.in_plant,
+    }[scope]
+    return {name: info.default for name, info in table().items() if pick(info)}
+
+
+def for_estimator(params: dict[str, float]) -> dict[str, float]:
+    """The subset of a parameter set the estimator takes."""
+    info = table()
+    return {k: v for k, v in params.items() if info[k].in_estimator()}
+
+
+def for_plant(params: dict[str, float]) -> dict[str, float]:
+    """The subset of a parameter set the joint takes."""
+    info = table()
+    return {k: v for k, v in params.items() if info[k].in_plant()}
+
+
+def check(params: dict, source: str = "parameter set") -> dict[str, float]:
+    """Validate names, types and ranges; returns the set as floats."""
+    info = table()
+    if not isinstance(params, dict):
+        raise ParameterError(f"{source}: expected a JSON object of name: value")
+    checked = {}
+    for name, value in params.items():
+        if name not in info:
+            raise ParameterError(f"{source}: unknown parameter '{name}'")
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ParameterError(f"{source}: parameter '{name}' must be a number, not {value!r}")
+        value = float(value)
+        p = info[name]
+        if not math.isfinite(value) or not p.min <= value <= p.max:
+            raise ParameterError(
+                f"{source}: parameter '{name}' = {value!r} is outside its valid range [{p.min}, {p.max}] {p.unit}")
+        checked[name] = value
+    return checked
+
+
+def load(path: str | os.PathLike | None) -> dict[str, float]:
+    """Defaults overridden by a JSON parameter file (None: defaults only)."""
+    params = defaults()
+    if path is None:
+        return params
+    try:
+        text = Path(path).read_text()
+    except OSError as e:
+        raise ParameterError(f"{path}: cannot read the parameter file ({e.strerror})") from None
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as e:
+        raise ParameterError(f"{path}: line {e.lineno}, column {e.colno}: not valid JSON ({e.msg})") from None
+    params.update(check(data, str(path)))
+    return params
+
+
+def _atomic_write(path: str | os.PathLike, text: str) -> None:
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def save(path: str | os.PathLike, params: dict[str, float]) -> None:
+    """Write a parameter set as JSON (contract format), atomically."""
+    _atomic_write(path, json.dumps(check(params), indent=2) + "\n")
+
+
+def save_ssv(path: str | os.PathLike, params: dict[str, float], name: str = "hdjoint") -> None:
+    """Write SSP 1.0 parameter values (.ssv) for the same set."""
+    info = table()
+    lines = ['<?xml version="1.0" encoding="UTF-8"?>',
+             f'<ssv:ParameterSet xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues"'
+             f' version="1.0" name={quoteattr(name)}>',
+             "  <ssv:Parameters>"]
+    for key, value in check(params).items():
+        unit = f" unit={quoteattr(info[key].unit)}" if info[key].unit != "1" else ""
+        lines.append(f'    <ssv:Parameter name={quoteattr(key)}><ssv:Real value="{value!r}"{unit}/></ssv:Parameter>')
+    lines += ["  </ssv:Parameters>", "</ssv:ParameterSet>", ""]
+    _atomic_write(path, "\n".join(lines))

@@ -1,0 +1,45 @@
+"""Figures. Plot functions take an Axes or make a figure, return the figure,
+and never compute anything the caller could not inspect."""
+from __future__ import annotations
+
+import io
+import base64
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+
+def torque_comparison(time, estimates: dict, title: str = ""):
+    """Estimates and the reference over time (top) and their errors (bottom)."""
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(10, 6), sharex=True, constrained_layout=True)
+    reference = estimates["reference"]
+    top.plot(time, reference, color="k", lw=1.0, label="true torque")
+    for name, est in estimates.items():
+        if name == "reference":
+            continue
+        top.plot(time, est, lw=0.6, label=name)
+        bottom.plot(time, np.asarray(est) - reference, lw=0.5, label=name)
+    top.set_ylabel("joint torque (N.m)")
+    top.legend(loc="upper left", fontsize=8)
+    bottom.set_ylabel("error (N.m)")
+    bottom.set_xlabel("time (s)")
+    bottom.legend(loc="upper left", fontsize=8)
+    if title:
+        top.set_title(title)
+    return fig
+
+
+def save(fig, path) -> None:
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def to_data_uri(fig) -> str:
+    """PNG as a data: URI, for self-contained HTML reports."""
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=100)
+    plt.close(fig)
+    return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode("ascii")
