@@ -6,6 +6,7 @@
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/vector.h>
 
+#include <chrono>
 #include <cmath>
 #include <map>
 #include <stdexcept>
@@ -153,6 +154,27 @@ std::map<std::string, OutArray> simulate_joint(const std::map<std::string, doubl
     return out;
 }
 
+// Seconds for n estimator samples on a synthetic moving joint, timed in C++
+// (for the benchmark script: the cost per step without Python in the loop).
+double time_estimator(const std::map<std::string, double>& values, long n) {
+    const Parameters p = parameters_from(values, true, false);
+    TorqueEstimator estimator(p);
+    double sink = 0.0;
+    nb::gil_scoped_release release;
+    const auto start = std::chrono::steady_clock::now();
+    for (long k = 0; k < n; ++k) {
+        const double t = static_cast<double>(k) * p.Ts;
+        const double theta_l = 0.5 * std::sin(1.5 * t);
+        const double tau = 3.0 * std::sin(1.5 * t);
+        const EstimatorInputs in{tau / (p.N * p.Kt), p.N * (theta_l + tau / p.Kf), theta_l};
+        estimator.step(in);
+        sink += estimator.outputs().tau_ukf;
+    }
+    const auto stop = std::chrono::steady_clock::now();
+    if (!std::isfinite(sink)) throw std::runtime_error("benchmark diverged");
+    return std::chrono::duration<double>(stop - start).count();
+}
+
 nb::list table() {
     nb::list rows;
     for (std::size_t i = 0; i < parameter_count(); ++i) {
@@ -180,6 +202,8 @@ NB_MODULE(_core, m) {
           nb::arg("theta_l"), "Compliance model and paper UKF over a recording, with the FMU's sampling.");
     m.def("compliance", &compliance, nb::arg("params"), nb::arg("i_m"), nb::arg("theta_m"), nb::arg("theta_l"),
           "The compliance model, eq. (3)-(8), per sample.");
+    m.def("time_estimator", &time_estimator, nb::arg("params"), nb::arg("samples"),
+          "Seconds for `samples` estimator steps timed inside C++ (benchmark).");
     m.def("simulate_joint", &simulate_joint, nb::arg("params"), nb::arg("time"), nb::arg("i_m"), nb::arg("tau_ext"),
           "The joint, open loop, with inputs held between rows.");
 }

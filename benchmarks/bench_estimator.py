@@ -1,0 +1,61 @@
+"""Speed figures for the README (printed, not asserted):
+  - ns per estimator step (compliance model + paper UKF) timed inside C++,
+  - us per step through JointTorqueEstimator.fmu driven by fmpy,
+  - seconds for `hdjoint estimate` on the 58 s paper recording (FMU and batch),
+  - seconds for the batch path over the same recording.
+Run: python benchmarks/bench_estimator.py
+"""
+from __future__ import annotations
+
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from hdjoint import _core, experiments, parameters
+from hdjoint.fmu_runner import run_estimator_fmu
+from hdjoint.recording import write_recording
+
+
+def best_of(fn, repeats=5):
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - start)
+    return min(times)
+
+
+def main():
+    params = parameters.for_estimator(parameters.defaults())
+    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}")
+
+    n = 2_000_000
+    seconds = min(_core.time_estimator(params, n) for _ in range(3))
+    print(f"C++ estimator step (compliance + UKF):  {seconds / n * 1e9:8.1f} ns/step")
+
+    rec = experiments.run("paper")
+    steps = len(rec)
+    fmu_s = best_of(lambda: run_estimator_fmu(rec.time, rec.i_m, rec.theta_m, rec.theta_l, params), 3)
+    print(f"through the FMU via fmpy:               {fmu_s / steps * 1e6:8.2f} us/step  ({steps} steps)")
+    batch_s = best_of(lambda: _core.run_estimator(params, rec.time, rec.i_m, rec.theta_m, rec.theta_l))
+    print(f"batch path (nanobind) on 58 s:          {batch_s:8.3f} s  ({batch_s / steps * 1e9:.0f} ns/step)")
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "paper.csv"
+        write_recording(path, rec)
+        for engine in ("fmu", "batch"):
+            cmd = [sys.executable, "-m", "hdjoint.cli", "estimate", str(path), "--engine", engine,
+                   "-o", str(Path(tmp) / "est.csv")]
+            wall = best_of(lambda: subprocess.run(cmd, check=True, capture_output=True), 3)
+            print(f"`hdjoint estimate` 58 s, --engine {engine:5s}: {wall:8.2f} s (whole command, incl. start-up)")
+
+
+if __name__ == "__main__":
+    np.seterr(all="ignore")
+    main()

@@ -1,0 +1,7 @@
+#!/usr/bin/env bash
+# Quick start, one command: install everything, then run the main job on the
+# built-in example data (FMUs, torque estimation, paper table, report).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/install.sh
+hdjoint demo --out "${1:-hdjoint-demo}"

@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# Tests, one command: install everything, build and run the C++ unit tests,
+# then the Python test suite (which loads the real FMUs through fmpy).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/install.sh
+
+if ! [ -e /usr/include/gtest/gtest.h ]; then
+  if command -v apt-get >/dev/null; then
+    (apt-get update -qq && apt-get install -y -qq libgtest-dev) >/dev/null
+  fi
+fi
+cmake -S . -B build/cpp-tests -G Ninja -DHDJOINT_BUILD_TESTS=ON -DHDJOINT_BUILD_FMUS=OFF \
+    -DPython_EXECUTABLE="$(command -v python3)" >/dev/null
+cmake --build build/cpp-tests
+ctest --test-dir build/cpp-tests --output-on-failure
+
+python3 -m pytest -q tests "$@"
