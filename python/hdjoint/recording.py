@@ -354,7 +354,7 @@ def _format_column(name: str, values) -> list[str]:
     if arr.dtype.kind in "fiub":
         # repr of a Python float is the shortest text that reads back to the
         # identical double: full precision without '%.17g' noise.
-        return [repr(v) for v in arr.astype(float).tolist()]
+        return list(map(repr, arr.astype(float).tolist()))
     if arr.dtype.kind in "UO":
         # Text (e.g. a label column) passes through; anything else numeric-
         # like is converted the same way as floats.

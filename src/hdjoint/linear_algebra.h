@@ -1,6 +1,8 @@
 #pragma once
 // Small fixed-size helpers the UKF needs: a Cholesky factor that repairs an
 // indefinite covariance instead of failing, and a symmetric solve.
+#include <cmath>
+
 #include <Eigen/Dense>
 
 namespace hdjoint {
@@ -74,5 +76,51 @@ inline FactorStatus robust_cholesky<2>(Matrix<2>* P, Matrix<2>* L) {
     }
     return FactorStatus::Failed;
 }
+
+// Solves A X = B for symmetric positive definite A by Cholesky; compute()
+// says whether A could be factorised.
+template <int N>
+class SpdSolver {
+public:
+    bool compute(const Matrix<N>& A) {
+        llt_.compute(A);
+        return llt_.info() == Eigen::Success && A.allFinite();
+    }
+    template <int C>
+    Eigen::Matrix<double, N, C> solve(const Eigen::Matrix<double, N, C>& B) const { return llt_.solve(B); }
+
+private:
+    Eigen::LLT<Matrix<N>> llt_;
+};
+
+// The 2x2 case in closed form (factorisation, forward and back substitution).
+template <>
+class SpdSolver<2> {
+public:
+    bool compute(const Matrix<2>& A) {
+        const double a = A(0, 0), b = A(1, 0), d = A(1, 1);
+        if (!(a > 0.0) || !std::isfinite(a) || !std::isfinite(b) || !std::isfinite(d)) return false;
+        l00_ = std::sqrt(a);
+        l10_ = b / l00_;
+        const double s = d - l10_ * l10_;
+        if (!(s > 0.0)) return false;
+        l11_ = std::sqrt(s);
+        return true;
+    }
+    template <int C>
+    Eigen::Matrix<double, 2, C> solve(const Eigen::Matrix<double, 2, C>& B) const {
+        Eigen::Matrix<double, 2, C> X;
+        for (int j = 0; j < B.cols(); ++j) {
+            const double y0 = B(0, j) / l00_;
+            const double y1 = (B(1, j) - l10_ * y0) / l11_;
+            X(1, j) = y1 / l11_;
+            X(0, j) = (y0 - l10_ * X(1, j)) / l00_;
+        }
+        return X;
+    }
+
+private:
+    double l00_ = 1.0, l10_ = 0.0, l11_ = 1.0;
+};
 
 }  // namespace hdjoint

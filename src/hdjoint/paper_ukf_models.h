@@ -11,6 +11,7 @@ namespace hdjoint {
 struct PaperSystemModel {
     using State = Vector<2>;
     using Control = double;
+    static constexpr bool kLinear = true;  // the UKF may propagate it exactly
     double F00 = 1.0, F01 = 0.0, B0 = 0.0;
 
     PaperSystemModel() = default;
@@ -20,6 +21,11 @@ struct PaperSystemModel {
         State next;
         next << F00 * x(0) + F01 * x(1) + B0 * u, x(1);
         return next;
+    }
+    Matrix<2> transition() const {
+        Matrix<2> F;
+        F << F00, F01, 0.0, 1.0;
+        return F;
     }
 };
 

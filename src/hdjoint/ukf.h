@@ -34,9 +34,25 @@ public:
     Covariance& covariance() { return P_; }
     const Covariance& initial_covariance() const { return P0_; }
 
-    // eq. (16)-(21)
+    // eq. (16)-(21). A system model that declares itself linear (kLinear and
+    // a transition() matrix) is propagated exactly as F P F^T + Q: for a
+    // linear f that is what the unscented transform computes, without
+    // 2n+1 model evaluations.
     template <class System>
     FilterStatus predict(const System& system, const typename System::Control& u, const Covariance& Q) {
+        if constexpr (is_linear<System>()) {
+            FilterStatus status = FilterStatus::Ok;
+            if (!P_.allFinite() || !x_.allFinite()) {
+                P_ = P0_;
+                if (!x_.allFinite()) x_.setZero();
+                status = FilterStatus::CovarianceReset;
+            }
+            const Covariance F = system.transition();
+            x_ = system.f(x_, u);
+            P_ = F * P_ * F.transpose() + Q;
+            symmetrize(&P_);
+            return status;
+        }
         SigmaPoints<NX> chi;
         const FilterStatus drawn = draw(&chi);
         for (int i = 0; i < chi.cols(); ++i) chi.col(i) = system.f(chi.col(i), u);
@@ -75,21 +91,31 @@ public:
             (chi.colwise() - x_) * weights_.covariance.asDiagonal() * (zeta.colwise() - z_hat).transpose();
         result.innovation = z - z_hat;
         result.innovation_covariance = Pzz;
-        Eigen::LLT<Matrix<NZ>> llt(Pzz);
-        if (llt.info() != Eigen::Success || !Pzz.allFinite() || !result.innovation.allFinite()) {
+        SpdSolver<NZ> solver;
+        if (!solver.compute(Pzz) || !result.innovation.allFinite()) {
             result.status = FilterStatus::UpdateSkipped;
             return result;
         }
         // K = Pxz Pzz^-1, taken as the transpose of Pzz^-1 Pxz^T.
-        const Eigen::Matrix<double, NX, NZ> K = llt.solve(Pxz.transpose()).transpose();
+        const Eigen::Matrix<double, NX, NZ> K = solver.solve(Eigen::Matrix<double, NZ, NX>(Pxz.transpose())).transpose();
         x_ += K * result.innovation;
         P_ -= K * Pzz * K.transpose();
         symmetrize(&P_);
-        result.nis = result.innovation.dot(llt.solve(result.innovation));
+        result.nis = result.innovation.dot(solver.solve(result.innovation));
         return result;
     }
 
 private:
+    template <class System>
+    static constexpr bool is_linear() {
+        if constexpr (requires_linear_flag<System>(0)) return System::kLinear;
+        return false;
+    }
+    template <class System>
+    static constexpr auto requires_linear_flag(int) -> decltype(System::kLinear, bool()) { return true; }
+    template <class System>
+    static constexpr bool requires_linear_flag(...) { return false; }
+
     // Sigma points from the current mean and covariance, repairing or
     // resetting P when it cannot be factorised.
     FilterStatus draw(SigmaPoints<NX>* chi) {
