@@ -78,8 +78,8 @@ def cmd_estimate(args) -> int:
             est = _core.run_estimator(params, rec.time, rec.i_m, rec.theta_m, rec.theta_l)
         except RuntimeError as e:
             raise UserError(f"{args.recording}: {e}") from None
-        est.pop("status")
-        est.pop("nis")
+        from .fmu_runner import ESTIMATOR_OUTPUTS
+        est = {name: est[name] for name in ESTIMATOR_OUTPUTS}  # the FMU engine's columns, in its order
     write_csv(args.output, {"time": rec.time, **est})
     if rec.tau_sensor is not None:
         print(f"{'estimate':<16} {'RMS error':>10} {'max error':>10}   (N.m, against tau_sensor)")

@@ -8,6 +8,7 @@ means tens of thousands of steps.
 from __future__ import annotations
 
 import ctypes
+import itertools
 import shutil
 from pathlib import Path
 
@@ -28,6 +29,24 @@ class FmuError(RuntimeError):
     """An FMU call failed; the message carries what the FMU logged."""
 
 
+# fmpy's logger proxy (which formats the FMU's printf-style message) keeps ONE
+# Python logger in a C static: the last one registered. Every instance
+# therefore registers this one module-level dispatcher, alive for the whole
+# process, and messages are routed by the componentEnvironment each instance
+# hands its FMU. (A per-instance logger would send one instance's messages
+# to another, and crash once the registered instance was freed.)
+_MESSAGES: dict[int, list] = {}
+_ENVIRONMENTS = itertools.count(1)
+
+
+def _dispatch(env, instance_name, status, category, message):
+    entry = (_STATUS[status] if 0 <= status < len(_STATUS) else str(status), message.decode("utf-8", "replace"))
+    _MESSAGES.setdefault(env or 0, []).append(entry)
+
+
+_DISPATCHER = fmi2CallbackLoggerTYPE(_dispatch)
+
+
 class FmuInstance:
     """One instance of an FMU, driven step by step."""
 
@@ -38,8 +57,11 @@ class FmuInstance:
         # Only what running needs: the FMU also carries its sources (with Eigen).
         self._unzipdir = extract(str(self.path), include=lambda name: not name.startswith("sources/"))
         self.messages: list[tuple[str, str]] = []  # (status, message)
+        self._environment = next(_ENVIRONMENTS)
+        _MESSAGES[self._environment] = self.messages
         self._callbacks = fmi2CallbackFunctions()
-        self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
+        self._callbacks.logger = _DISPATCHER
+        self._callbacks.componentEnvironment = self._environment
         self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
         self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
         try:
@@ -52,10 +74,6 @@ class FmuInstance:
                                instanceName=instance_name)
         self.slave.instantiate(callbacks=self._callbacks, loggingOn=logging_on)
         self._terminated = False
-
-    def _log(self, env, instance_name, status, category, message):
-        self.messages.append((_STATUS[status] if 0 <= status < len(_STATUS) else str(status),
-                              message.decode("utf-8", "replace")))
 
     def last_error(self) -> str:
         for status, message in reversed(self.messages):
@@ -101,6 +119,7 @@ class FmuInstance:
             except Exception:
                 pass
             self.slave.freeInstance()
+            _MESSAGES.pop(self._environment, None)
             shutil.rmtree(self._unzipdir, ignore_errors=True)
 
     def __enter__(self):

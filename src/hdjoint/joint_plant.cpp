@@ -118,6 +118,8 @@ bool JointPlant::ros2_step(double h, const PlantInputs& in, std::string* message
     const PlantState k2 = W.solve(f1 - 2.0 * k1);
     const PlantState next = x_ + 1.5 * h * k1 + 0.5 * h * k2;
     if (!next.allFinite()) return fail("non-finite state");
+    double tau = 0.0;  // reject a step that lands beyond the torsion asymptote, so it can be retried smaller
+    if (!joint_torque(next, &tau)) return fail("singular torsion at the end of a substep");
     x_ = next;
     return true;
 }
@@ -127,8 +129,19 @@ bool JointPlant::advance(double h, const PlantInputs& in, std::string* message) 
     const int substeps = std::max(1, static_cast<int>(std::ceil(h / p_.max_step - 1e-9)));
     const double dt = h / substeps;
     for (int i = 0; i < substeps; ++i)
-        if (!ros2_step(dt, in, message)) return false;
+        if (!substep(dt, in, 0, message)) return false;
     return true;
+}
+
+// A substep whose stage leaves the model's domain (a violent transient
+// overshooting the torsion asymptote) is retried as two halves, down to
+// 1/1024 of a substep, before the plant reports failure.
+bool JointPlant::substep(double h, const PlantInputs& in, int depth, std::string* message) {
+    const PlantState before = x_;
+    if (ros2_step(h, in, depth == kMaxHalvings ? message : nullptr)) return true;
+    x_ = before;
+    if (depth == kMaxHalvings) return false;
+    return substep(0.5 * h, in, depth + 1, message) && substep(0.5 * h, in, depth + 1, message);
 }
 
 PlantOutputs JointPlant::outputs() const {

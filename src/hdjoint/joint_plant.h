@@ -61,6 +61,8 @@ private:
     // State derivative and its Jacobian (analytic).
     bool derivative(const PlantState& x, const PlantInputs& in, PlantState* dx, Matrix<4>* J) const;
     bool ros2_step(double h, const PlantInputs& in, std::string* message);
+    bool substep(double h, const PlantInputs& in, int depth, std::string* message);
+    static constexpr int kMaxHalvings = 10;
 
     Parameters p_;
     PlantState x_ = PlantState::Zero();
