@@ -89,6 +89,42 @@ def cmd_estimate(args) -> int:
     return 0
 
 
+def cmd_diagnose(args) -> int:
+    import json
+    import shutil
+    import tempfile
+    from . import parameters, report
+    from .diagnosis import DiagnosisError, diagnose
+    rec = _read(args.recording)
+    nominal = _params(args.params)
+    try:
+        diag, doc = diagnose(rec, nominal, progress=lambda m: print(f"[diagnose] {m}", file=sys.stderr, flush=True))
+    except DiagnosisError as e:
+        raise UserError(str(e)) from None
+    page = report.build(diag, doc)
+    # Everything is computed; stage the files, then move them in, so a
+    # failure never leaves a half-written DIR.
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=out) as tmp:
+        stage = Path(tmp)
+        (stage / "findings.json").write_text(json.dumps(doc, indent=2, default=float) + "\n")
+        parameters.save(stage / "params.json", doc["params"])
+        parameters.save_ssv(stage / "params.ssv", doc["params"], name="hdjoint corrected")
+        (stage / "report.html").write_text(page)
+        for name in ("findings.json", "params.json", "params.ssv", "report.html"):
+            shutil.move(str(stage / name), out / name)
+    print(f"verdict: {doc['verdict']}")
+    for f in doc["findings"]:
+        fit = f["fit"]
+        print(f"  {f['effect']:<28} {f['where']['part']:<13} confidence {f['confidence']:.2f}  held-out RMS "
+              f"{fit['holdout_rms_before']:.4f} -> {fit['holdout_rms_after']:.4f} N.m")
+    for u in doc["unexplained"]:
+        print(f"  unexplained: {u['channel']} residual depends on {u['feature']} (largest at {u['largest_at']})")
+    print(f"wrote {out}/findings.json, params.json, params.ssv, report.html ({doc['seconds']} s)")
+    return 0
+
+
 def cmd_demo(args) -> int:
     from .demo import run_demo
     run_demo(Path(args.out))
@@ -120,6 +156,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help="run JointTorqueEstimator.fmu through fmpy (default) or the native batch path")
     p.add_argument("-o", "--output", required=True, help="estimates to write (CSV)")
     p.set_defaults(run=cmd_estimate)
+
+    p = sub.add_parser("diagnose", help="locate and name what the model leaves out of a recording")
+    p.add_argument("recording")
+    p.add_argument("--params", help="the nominal parameter set (JSON)")
+    p.add_argument("--out", required=True, help="directory for findings.json, params.json, params.ssv, report.html")
+    p.set_defaults(run=cmd_diagnose)
 
     p = sub.add_parser("demo", help="the main job on built-in data: FMUs, estimation, paper table, report")
     p.add_argument("--out", default="hdjoint-demo", help="output directory (default: hdjoint-demo)")

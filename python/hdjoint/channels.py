@@ -1,0 +1,102 @@
+"""Independent estimates of the same joint torque, one per part of the model.
+
+  tau_T  transmission: the encoders through eq. (3)-(8) (the C++ compliance
+         model, with every beyond-paper term the parameter set switches on)
+  tau_M  motor: the current through eq. (2), N*(Kt*i + cogging - Jm*alpha_m
+         - friction(omega_m, t))
+  tau_L  link: the link's motion, Jl*alpha_l + Bl*omega_l + mgl*sin(theta_l)
+         + link friction (no external torque assumed)
+  tau_S  the torque sensor, when the recording has one
+
+The differences between them are the residual channels the diagnosis
+localises mismatches in: an effect lives in one part of the model.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import _core, parameters
+from .recording import Recording
+from .signals import Kinematics
+
+
+@dataclass
+class Prepared:
+    """A recording with what every model evaluation needs, computed once."""
+    rec: Recording
+    kin: Kinematics
+    t_rel: np.ndarray  # time since the start, s
+
+    def __post_init__(self):
+        self._smoothed: dict[int, np.ndarray] = {}
+
+    @property
+    def has_sensor(self) -> bool:
+        return self.rec.tau_sensor is not None
+
+    def smoothed(self, x: np.ndarray) -> np.ndarray:
+        """x through the kinematics' smoothing filter (cached per array)."""
+        key = id(x)
+        if key not in self._smoothed:
+            self._smoothed[key] = self.kin.smooth(np.nan_to_num(x))
+        return self._smoothed[key]
+
+# The motor and link estimates use differentiated encoders, so they see the
+# world through the Savitzky-Golay filter: their current is smoothed the
+# same way, and whatever they are compared with must be too (SMOOTHED_PARTS).
+SMOOTHED_PARTS = ("motor", "link")
+
+
+_NOT_YET_IN_TABLE = {"i_delay": 0.0, "Fs": 0.0, "omega_s": 20.0, "Fc_drift": 0.0, "cog_order": 6.0, "cog_a": 0.0,
+                     "cog_b": 0.0, "Fl": 0.0}  # TEMPORARY until the C++ effect terms land
+
+
+def _get(p: dict, name: str) -> float:
+    if name in p:
+        return p[name]
+    info = parameters.table().get(name)
+    return info.default if info else _NOT_YET_IN_TABLE[name]
+
+
+def tau_transmission(prep: Prepared, p: dict[str, float]) -> np.ndarray:
+    """tau_T: the compliance model over the recording (NaN where the torsion is singular)."""
+    rec = prep.rec
+    return _core.compliance(parameters.for_estimator(p), rec.i_m, rec.theta_m, rec.theta_l)["tau_compliance"]
+
+
+def motor_friction(p: dict, omega: np.ndarray, t_rel: np.ndarray) -> np.ndarray:
+    """Motor friction of eq. (2) with the Stribeck and drift terms (as in src/hdjoint/friction.h)."""
+    scale = 1.0 + _get(p, "Fc_drift") * t_rel
+    level = _get(p, "Fc") + _get(p, "Fs") * np.exp(-(omega / _get(p, "omega_s")) ** 2)
+    return scale * level * np.tanh(omega / _get(p, "omega_fc")) + _get(p, "Bm") * omega
+
+
+def delayed_current(prep: Prepared, delay: float) -> np.ndarray:
+    """The current realigned with the encoders when its measurement lags by `delay` seconds."""
+    rec = prep.rec
+    if delay == 0.0:
+        return rec.i_m
+    return np.interp(rec.time + delay, rec.time, rec.i_m)
+
+
+def tau_motor(prep: Prepared, p: dict[str, float]) -> np.ndarray:
+    """tau_M: the link-side torque the motor equation (2) implies."""
+    rec, kin = prep.rec, prep.kin
+    i = prep.smoothed(delayed_current(prep, _get(p, "i_delay")))
+    order = _get(p, "cog_order")
+    cogging = _get(p, "cog_a") * np.cos(order * rec.theta_m) + _get(p, "cog_b") * np.sin(order * rec.theta_m)
+    drive = p["Kt"] * i + cogging - p["Jm"] * kin.alpha_m - motor_friction(p, kin.omega_m, prep.t_rel)
+    return p["N"] * drive
+
+
+def tau_link(prep: Prepared, p: dict[str, float]) -> np.ndarray:
+    """tau_L: the torque the link's own dynamics need (no external torque)."""
+    rec, kin = prep.rec, prep.kin
+    friction = _get(p, "Fl") * np.tanh(kin.omega_l * p["N"] / _get(p, "omega_fc"))
+    return (_get(p, "Jl") * kin.alpha_l + _get(p, "Bl") * kin.omega_l
+            + _get(p, "mgl") * np.sin(rec.theta_l) + friction)
+
+
+ESTIMATES = {"transmission": tau_transmission, "motor": tau_motor, "link": tau_link}

@@ -1,0 +1,72 @@
+"""Figures of a diagnosis. Each takes the arrays it shows (the report
+module gathers them) and an Axes, and returns the Axes."""
+from __future__ import annotations
+
+import numpy as np
+
+
+def residual_over_time(ax, t, before, after, segments, title):
+    ax.plot(t, before, lw=0.4, color="tab:red", alpha=0.7, label="calibrated nominal model")
+    ax.plot(t, after, lw=0.4, color="tab:blue", alpha=0.8, label="corrected model")
+    for a, b in segments:
+        ax.axvspan(a, b, color="orange", alpha=0.15, lw=0)
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("residual (N.m)")
+    ax.set_title(title, fontsize=9)
+    ax.legend(loc="upper right", fontsize=7)
+    return ax
+
+
+def residual_vs_feature(ax, x, before, after, xlabel, bins=30):
+    """Mean residual per bin of a regime variable (speed, torque...)."""
+    ok = np.isfinite(x) & np.isfinite(before) & np.isfinite(after)
+    edges = np.unique(np.percentile(x[ok], np.linspace(0, 100, bins + 1)))
+    centres = 0.5 * (edges[1:] + edges[:-1])
+    idx = np.clip(np.searchsorted(edges, x[ok], side="right") - 1, 0, len(edges) - 2)
+    for y, color, label in ((before[ok], "tab:red", "calibrated nominal"), (after[ok], "tab:blue", "corrected")):
+        mean = np.bincount(idx, weights=y, minlength=len(centres)) / np.maximum(
+            np.bincount(idx, minlength=len(centres)), 1)
+        ax.plot(centres, mean, marker=".", color=color, label=label)
+    ax.axhline(0, color="k", lw=0.5)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("mean residual (N.m)")
+    ax.legend(fontsize=7)
+    return ax
+
+
+def order_spectrum(ax, angle, before, after, orders, angle_name):
+    """Amplitude of the residual at each order of an angle (least squares per order)."""
+    for y, color, label in ((before, "tab:red", "calibrated nominal"), (after, "tab:blue", "corrected")):
+        ok = np.isfinite(y)
+        amps = []
+        for k in orders:
+            basis = np.column_stack([np.cos(k * angle[ok]), np.sin(k * angle[ok]), np.ones(ok.sum())])
+            coef, *_ = np.linalg.lstsq(basis, y[ok], rcond=None)
+            amps.append(np.hypot(coef[0], coef[1]))
+        ax.plot(orders, amps, marker="o", ms=3, color=color, label=label)
+    ax.set_xlabel(f"order of {angle_name} (cycles per revolution)")
+    ax.set_ylabel("amplitude (N.m)")
+    ax.legend(fontsize=7)
+    return ax
+
+
+def torque_torsion_loop(ax, torsion, torque_ref, torque_model, max_points=20000):
+    """Reference torque against elastic torsion: hysteresis and backlash show as loops and flats."""
+    step = max(1, len(torsion) // max_points)
+    ax.plot(torsion[::step] * 1e3, torque_ref[::step], ".", ms=1, color="k", alpha=0.3, label="reference torque")
+    ax.plot(torsion[::step] * 1e3, torque_model[::step], ".", ms=1, color="tab:blue", alpha=0.3,
+            label="corrected model")
+    ax.set_xlabel("flexspline torsion (mrad)")
+    ax.set_ylabel("torque (N.m)")
+    ax.legend(fontsize=7, markerscale=8)
+    return ax
+
+
+def rms_bars(ax, labels, before, after, ylabel="RMS (N.m)"):
+    x = np.arange(len(labels))
+    ax.bar(x - 0.2, before, 0.4, color="tab:red", label="before")
+    ax.bar(x + 0.2, after, 0.4, color="tab:blue", label="after")
+    ax.set_xticks(x, labels, rotation=15, ha="right", fontsize=7)
+    ax.set_ylabel(ylabel)
+    ax.legend(fontsize=7)
+    return ax

@@ -1,0 +1,142 @@
+"""The library of harmonic-drive physics the diagnosis tests, one entry per
+effect ID of the contract: which part of the model it lives in, which
+parameters of the C++ model carry it, whether a nominal parameter set
+already has it switched on, where a fit of it starts, and what a recording
+must contain for it to be testable at all."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from .channels import Prepared
+
+KINEMATIC_EQ7 = ("al1", "bl1", "aw1", "bw1", "aw2", "bw2")
+KINEMATIC_EXTRA = ("ke_m1", "ke_m2", "ke_l1", "ke_l2")  # slots: <slot>_order, <slot>_a, <slot>_b
+
+
+@dataclass(frozen=True)
+class Effect:
+    id: str
+    part: str                     # "transmission", "motor" or "link"
+    params: tuple[str, ...]       # what a fit of this effect adjusts
+    physics: str                  # what was left out, in words
+    model: str                    # the model terms that represent it
+    is_on: Callable[[dict], bool]  # the nominal set already has it: calibrate, don't hypothesise
+    starts: tuple[dict, ...] = ()  # starting values for fits (grids over nonlinear parameters)
+    needs: str = ""               # excitation it needs (checked by `testable`)
+    lookalikes: tuple[str, ...] = field(default=())
+
+
+def _nonzero(*names):
+    return lambda p: any(p.get(n, 0.0) != 0.0 for n in names)
+
+
+EFFECTS: dict[str, Effect] = {e.id: e for e in [
+    Effect("kinematic_error", "transmission", (),  # slots are chosen by the order search
+           "kinematic error (gear-meshing transmission error) at orders of the motor or link angle beyond eq. (7)",
+           "extra Fourier terms of theta_m and theta_l in theta_err (ke_m1/ke_m2/ke_l1/ke_l2)",
+           lambda p: False, needs="angle", lookalikes=("cogging",)),
+    Effect("wave_generator_compliance", "transmission", ("Kw", "Cw"),
+           "wave generator (bearing and plug) compliance, eq. (4)", "wg(tau) with Kw, Cw",
+           lambda p: p.get("Kw", 1e9) < 1e8, starts=({"Kw": 3.0, "Cw": 0.0}, {"Kw": 10.0, "Cw": 10.0},
+                                                    {"Kw": 30.0, "Cw": 30.0}),
+           needs="torque", lookalikes=("stiffness_nonlinearity", "backlash")),
+    Effect("stiffness_nonlinearity", "transmission", ("Cf",),
+           "flexspline stiffening with torque (the catalogue's K1 -> K3)", "atan law of eq. (5) with Cf",
+           _nonzero("Cf"), starts=({"Cf": 0.03}, {"Cf": 0.08}, {"Cf": 0.2}), needs="torque",
+           lookalikes=("wave_generator_compliance",)),
+    Effect("hysteresis", "transmission", ("hys_H", "hys_sigma"),
+           "hysteresis of the flexspline: torque depends on the direction of loading (a rate-independent loop)",
+           "Dahl hysteresis torque added to the elastic torque (hys_H, hys_sigma)",
+           _nonzero("hys_H"), starts=({"hys_H": 0.1, "hys_sigma": 5e3}, {"hys_H": 0.3, "hys_sigma": 3e4},
+                                      {"hys_H": 0.8, "hys_sigma": 1e5}),
+           needs="torque_reversals", lookalikes=("backlash", "coulomb_friction")),
+    Effect("backlash", "transmission", ("backlash",),
+           "lost motion: a dead zone of torsion around zero torque", "dead zone of width `backlash` on the torsion",
+           _nonzero("backlash"), starts=({"backlash": 1e-5}, {"backlash": 4e-5}, {"backlash": 1.5e-4}),
+           needs="torque_reversals", lookalikes=("hysteresis", "wave_generator_compliance")),
+    Effect("coulomb_friction", "motor", ("Fc",),
+           "Coulomb friction of motor and wave generator", "tau_fm = Fc*tanh(omega_m/omega_fc)",
+           _nonzero("Fc"), starts=({"Fc": 0.005}, {"Fc": 0.02}), needs="speed_reversals",
+           lookalikes=("hysteresis", "stribeck_friction")),
+    Effect("stribeck_friction", "motor", ("Fs", "omega_s"),
+           "Stribeck friction: higher friction at low speed", "(Fc + Fs*exp(-(omega/omega_s)^2))*tanh(...)",
+           _nonzero("Fs"), starts=({"Fs": 0.005, "omega_s": 3.0}, {"Fs": 0.01, "omega_s": 15.0},
+                                   {"Fs": 0.02, "omega_s": 50.0}),
+           needs="low_speed", lookalikes=("coulomb_friction",)),
+    Effect("viscous_friction", "motor", ("Bm",),
+           "viscous friction proportional to motor speed", "Bm*omega_m", _nonzero("Bm"),
+           starts=({"Bm": 2e-5}, {"Bm": 1e-4}), needs="speed", lookalikes=("time_delay",)),
+    Effect("cogging", "motor", (),  # the order comes from the order search
+           "motor cogging / torque ripple periodic in the motor angle",
+           "cog_a*cos(cog_order*theta_m) + cog_b*sin(cog_order*theta_m) added to the motor torque",
+           _nonzero("cog_a", "cog_b"), needs="angle", lookalikes=("kinematic_error",)),
+    Effect("time_delay", "motor", ("i_delay",),
+           "a time delay between the current measurement and the encoders", "current realigned by i_delay",
+           _nonzero("i_delay"), starts=({"i_delay": 1e-3}, {"i_delay": 3e-3}, {"i_delay": 8e-3}),
+           needs="current_dynamics", lookalikes=("viscous_friction",)),
+    Effect("thermal_drift", "motor", ("Fc_drift",),
+           "friction changing over the run (warm-up)", "friction scaled by (1 + Fc_drift*t)",
+           _nonzero("Fc_drift"), starts=({"Fc_drift": -2e-3}, {"Fc_drift": 2e-3}), needs="duration"),
+    Effect("gravity_load", "link", ("mgl",),
+           "gravity (or payload) torque on the link", "mgl*sin(theta_l)", _nonzero("mgl"),
+           starts=({"mgl": 1.0}, {"mgl": -1.0}), needs="link_travel"),
+    Effect("link_friction", "link", ("Fl",),
+           "friction on the link side (output bearing, seals)", "Fl*tanh(omega_l*N/omega_fc)", _nonzero("Fl"),
+           starts=({"Fl": 0.05}, {"Fl": 0.3}), needs="link_reversals"),
+]}
+
+# Parameters calibrated whenever their part of the model is fitted: the
+# nominal set has them, and a few percent of error in them must not be
+# mistaken for missing physics.
+ALWAYS_CALIBRATED = {
+    "transmission": ("a0", "Kf"),
+    "motor": ("Kt", "Jm"),
+    "link": ("Jl", "Bl"),
+}
+
+
+def calibrated_parameters(part: str, nominal: dict, sensor: bool) -> list[str]:
+    """Parameters of `part` to calibrate: the always-calibrated ones plus those
+    of every effect the nominal set switches on."""
+    names = list(ALWAYS_CALIBRATED[part])
+    if part == "motor" and not sensor:
+        names.remove("Kt")  # without a torque sensor only Kt/Kf is observable: Kt is kept
+    if part == "transmission" and any(nominal.get(n, 0.0) for n in KINEMATIC_EQ7):
+        names += list(KINEMATIC_EQ7)
+    for effect in EFFECTS.values():
+        if effect.part == part and effect.is_on(nominal):
+            names += [n for n in effect.params if n not in names]
+    return names
+
+
+def _reversals(x: np.ndarray, threshold: float) -> int:
+    s = np.sign(x[np.abs(x) > threshold])
+    return int(np.count_nonzero(np.diff(s)))
+
+
+def testable(effect: Effect, prep: Prepared, reference_torque: np.ndarray) -> str | None:
+    """None when the recording excites the effect; otherwise why it cannot be tested."""
+    rec, kin = prep.rec, prep.kin
+    speed = np.abs(kin.omega_m)
+    torque_span = np.nanpercentile(reference_torque, 95) - np.nanpercentile(reference_torque, 5)
+    checks = {
+        "angle": (np.ptp(rec.theta_m) > 2 * np.pi or np.ptp(rec.theta_l) > 0.5,
+                  "the motor turns less than one revolution"),
+        "torque": (torque_span > 0.5, f"the torque varies by only {torque_span:.2f} N.m"),
+        "torque_reversals": (_reversals(reference_torque - np.nanmedian(reference_torque), 0.05 * max(torque_span, 1e-9)) >= 2,
+                             "the load never reverses"),
+        "speed_reversals": (_reversals(kin.omega_m, 0.5) >= 2, "the motor never reverses"),
+        "low_speed": (np.mean((speed > 0.2) & (speed < 20.0)) > 0.02 and _reversals(kin.omega_m, 0.5) >= 2,
+                      "the motor never passes slowly through zero speed"),
+        "speed": (np.percentile(speed, 95) > 10.0, "the motor never runs faster than 10 rad/s"),
+        "current_dynamics": (np.std(np.diff(rec.i_m)) > 0 and np.ptp(kin.alpha_m) > 50.0,
+                             "the current and acceleration hardly change"),
+        "duration": (rec.duration >= 10.0, f"the recording lasts {rec.duration:.1f} s (< 10 s)"),
+        "link_travel": (np.ptp(rec.theta_l) > 0.05, "the link moves less than 0.05 rad"),
+        "link_reversals": (_reversals(kin.omega_l, 0.005) >= 2, "the link never reverses"),
+    }
+    ok, why = checks[effect.needs] if effect.needs else (True, "")
+    return None if ok else why

@@ -1,0 +1,182 @@
+"""Turns a finished Diagnosis into the contract's findings document: where
+each mismatch is (part, time, regime, angle), its evidence, the model terms
+and parameters added, and the fit before and after."""
+from __future__ import annotations
+
+import numpy as np
+
+from . import _core, parameters
+from .metrics import error_figures
+from .structure import scan
+
+
+def _rms(x) -> float:
+    x = x[np.isfinite(x)]
+    return float(np.sqrt(np.mean(x * x))) if len(x) else float("nan")
+
+
+def _smooth(x, samples: int):
+    k = max(1, samples)
+    return np.convolve(np.nan_to_num(x), np.ones(k) / k, mode="same")
+
+
+def segments(t, mask, min_length: float) -> list[list[float]]:
+    """Contiguous [start, end] times where mask holds, longer than min_length, longest first."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(int), [0]])))
+    spans = [(t[a], t[min(b, len(t)) - 1]) for a, b in zip(edges[::2], edges[1::2])]
+    spans = [s for s in spans if s[1] - s[0] >= min_length]
+    return [[round(float(a), 4), round(float(b), 4)] for a, b in sorted(spans, key=lambda s: s[0] - s[1])]
+
+
+def regimes(diag, reference) -> dict[str, np.ndarray]:
+    kin = diag.prep.kin
+    speed = np.abs(kin.omega_m)
+    sign = np.sign(kin.omega_m)
+    change = np.flatnonzero(np.diff(sign[np.abs(kin.omega_m) > 0.5]) != 0)
+    near_reversal = np.zeros(len(speed), bool)
+    moving = np.flatnonzero(np.abs(kin.omega_m) > 0.5)
+    step = float(np.median(np.diff(diag.rec.time)))
+    width = max(1, int(0.1 / step))
+    for c in moving[change]:
+        near_reversal[max(0, c - width): c + width] = True
+    load = np.abs(reference)
+    return {
+        "low speed (|omega_m| < 2 rad/s)": speed < 2.0,
+        "medium speed (2-20 rad/s)": (speed >= 2.0) & (speed < 20.0),
+        "high speed (> 20 rad/s)": speed >= 20.0,
+        "positive direction": kin.omega_m > 0.5,
+        "negative direction": kin.omega_m < -0.5,
+        "near speed reversals (±0.1 s)": near_reversal,
+        "low load (|tau| < 1 N.m)": load < 1.0,
+        "high load (|tau| > 3 N.m)": load > 3.0,
+        "late in the run (last third)": diag.prep.t_rel > 2.0 * diag.prep.t_rel[-1] / 3.0,
+        "early in the run (first third)": diag.prep.t_rel < diag.prep.t_rel[-1] / 3.0,
+    }
+
+
+def where(diag, finding) -> dict:
+    channel = diag._channels_of(finding.effect.part)[0]
+    before = diag.eval.residual(channel, finding.params_before)
+    after = diag.eval.residual(channel, finding.params_after)
+    contribution = before - after
+    step = float(np.median(np.diff(diag.rec.time)))
+    smooth = _smooth(contribution, int(0.05 / step))
+    peak = np.nanmax(np.abs(smooth)) or 1.0
+    mask = np.abs(smooth) > 0.5 * peak
+    energy = contribution ** 2
+    total = np.nansum(energy) or 1.0
+    concentration = {}
+    for name, m in regimes(diag, diag.reference_torque(finding.params_after)).items():
+        share_time = float(np.mean(m))
+        if share_time < 0.02:
+            continue
+        share_energy = float(np.nansum(energy[m]) / total)
+        concentration[name] = round(share_energy / share_time, 2)
+    top = sorted(concentration.items(), key=lambda kv: -kv[1])[:3]
+    out = {
+        "part": finding.effect.part,
+        "channel": channel.name,
+        "time_segments": segments(diag.rec.time, mask, 0.05)[:5],
+        "fraction_of_time": round(float(np.mean(mask)), 3),
+        "regime": {name: ratio for name, ratio in top if ratio > 1.3} or "throughout the run",
+        "contribution_rms": round(_rms(contribution), 5),
+    }
+    if finding.orders:
+        out["angle"] = [{"angle": o.angle, "order": o.order} for o in finding.orders]
+    return out
+
+
+def fit_figures(diag, finding) -> dict:
+    channel = diag._channels_of(finding.effect.part)[0]
+    before = diag.eval.residual(channel, finding.params_before)
+    after = diag.eval.residual(channel, finding.params_after)
+    return {"channel": channel.name, "rms_before": _rms(before), "rms_after": _rms(after),
+            "holdout_rms_before": _rms(before[diag.test]), "holdout_rms_after": _rms(after[diag.test])}
+
+
+def remaining_structure(diag, p) -> list[dict]:
+    """Held-out structure left in every channel after the accepted findings."""
+    rec, kin = diag.rec, diag.prep.kin
+    reference = diag.reference_torque(p)
+    loading = np.sign(np.gradient(_smooth(reference, 20)))
+    features = {
+        "time": (diag.prep.t_rel, None, "s"),
+        "motor speed": (kin.omega_m, None, "rad/s"),
+        "motor acceleration": (kin.alpha_m, None, "rad/s2"),
+        "torque level": (reference, None, "N.m"),
+        "torque, loading vs unloading": (reference + 1e4 * (loading > 0), None, "N.m (+1e4 when loading)"),
+        "motor angle (one revolution)": (rec.theta_m, 2 * np.pi, "rad"),
+        "link angle": (rec.theta_l, None, "rad"),
+    }
+    found = []
+    for c in diag.channels:
+        r = diag.eval.residual(c, p)
+        for s in scan(np.nan_to_num(r), features, diag.fold, diag.train, diag.test):
+            if s.gain.gain > 0.02 and s.gain.z > 4.0:
+                found.append({"channel": c.name, "feature": s.feature, "held_out_gain": round(s.gain.gain, 4),
+                              "z": round(s.gain.z, 1), "largest_at": s.peak_at})
+    return found
+
+
+def estimator_comparison(diag, corrected) -> dict | None:
+    """Torque estimators' error against the sensor with nominal vs corrected parameters."""
+    if not diag.has_sensor:
+        return None
+    rec = diag.rec
+    out = {}
+    for label, p in (("nominal", diag.nominal), ("corrected", corrected)):
+        try:
+            est = _core.run_estimator(parameters.for_estimator(p), rec.time, rec.i_m, rec.theta_m, rec.theta_l)
+        except RuntimeError as e:
+            out[label] = {"error": str(e)}
+            continue
+        out[label] = {name: {"rms": round(f.rms, 5), "max": round(f.max, 5)} for name, f in
+                      (("tau_compliance", error_figures(est["tau_compliance"], rec.tau_sensor)),
+                       ("tau_ukf", error_figures(est["tau_ukf"], rec.tau_sensor)))}
+    return out
+
+
+def document(diag, final_params: dict, unexplained: list[dict]) -> dict:
+    if diag.findings:
+        verdict = "missing_physics"
+    else:
+        verdict = "unexplained" if unexplained else "consistent"
+    findings = []
+    for f in diag.findings:
+        findings.append({
+            "effect": f.effect.id,
+            "confidence": f.confidence,
+            "where": where(diag, f),
+            "evidence": {
+                "physics_left_out": f.effect.physics,
+                "held_out_gain": round(f.gain.gain, 5),
+                "z": round(f.gain.z, 2),
+                "folds_improved": f"{int(np.sum(f.gain.fold_gains > 0))}/{len(f.gain.fold_gains)}",
+                "delta_bic": round(f.delta_bic, 1),
+                "runner_up": ({"effect": f.runner_up[0], "held_out_gain": round(f.runner_up[1], 5)}
+                              if f.runner_up else None),
+            },
+            "model": f.effect.model,
+            "parameters": {n: final_params[n] for n in _reported(f)},
+            "fit": fit_figures(diag, f),
+        })
+    return {
+        "verdict": verdict,
+        "findings": findings,
+        "params": final_params,
+        "calibration": {n: {"nominal": a, "calibrated": b} for n, (a, b) in diag.calibration.items()},
+        "not_testable": diag.not_testable,
+        "unexplained": unexplained,
+        "noise": {c: round(s, 6) for c, s in diag.sigma.items()},
+        "estimator": estimator_comparison(diag, final_params),
+        "recording": {"path": diag.rec.path, "samples": len(diag.rec), "duration": diag.rec.duration,
+                      "torque_sensor": diag.has_sensor},
+    }
+
+
+def _reported(f) -> list[str]:
+    extra = []
+    for n in f.fitted:
+        if n.endswith(("_a", "_b")) and not n.startswith(("al", "bl", "aw", "bw")):
+            extra.append(n[:-2] + "_order" if n.startswith("ke_") else "cog_order")
+    return list(dict.fromkeys(f.fitted + extra))

@@ -1,0 +1,132 @@
+"""The diagnosis report: one self-contained HTML page (figures embedded as
+PNG data URIs) that shows where the mismatch is, what was left out, the
+model added and the fit before and after."""
+from __future__ import annotations
+
+import html
+import json
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from . import diagnosis_plots as dp  # noqa: E402
+from .plots import to_data_uri  # noqa: E402
+
+VERDICT_TEXT = {
+    "missing_physics": "Physics is missing from the nominal model: the findings below name it, model it and "
+                       "show the fit improve on held-out data.",
+    "consistent": "Nothing is missing: after calibration the residuals hold no structure that predicts held-out "
+                  "data; what remains is noise and quantisation.",
+    "unexplained": "Structure remains that no hypothesis of the library explains; where it is is listed below.",
+}
+
+
+def _figure(draw, size=(9, 3.2)) -> str:
+    fig, ax = plt.subplots(figsize=size, constrained_layout=True)
+    draw(ax)
+    return to_data_uri(fig)
+
+
+def _img(uri: str, alt: str) -> str:
+    return f'<figure><img src="{uri}" alt="{html.escape(alt)}"><figcaption>{html.escape(alt)}</figcaption></figure>'
+
+
+def _table(rows, header) -> str:
+    head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
+    body = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in r) + "</tr>" for r in rows)
+    return f"<table><tr>{head}</tr>{body}</table>"
+
+
+def _fmt(x) -> str:
+    return f"{x:.4g}" if isinstance(x, (int, float)) else str(x)
+
+
+def build(diag, doc: dict) -> str:
+    """The report's HTML for a finished diagnosis and its findings document."""
+    rec, kin = diag.rec, diag.prep.kin
+    p0, p1 = diag.calibrated_params, doc["params"]
+    sections = []
+
+    # Where: every channel's residual over time, before and after, segments marked.
+    segs = [s for f in doc["findings"] for s in f["where"]["time_segments"]]
+    figs = []
+    for c in diag.channels:
+        before, after = diag.eval.residual(c, p0), diag.eval.residual(c, p1)
+        figs.append(_img(_figure(lambda ax: dp.residual_over_time(ax, rec.time, before, after, segs,
+                                                                   f"{c.name} residual")),
+                         f"Residual of the {c.name} channel over time (located segments shaded)"))
+        figs.append(_img(_figure(lambda ax: dp.residual_vs_feature(ax, kin.omega_m, before, after,
+                                                                    "motor speed (rad/s)"), (6, 3)),
+                         f"{c.name}: mean residual vs motor speed (regime)"))
+        travel = np.ptp(rec.theta_m)
+        orders = [k / 2 for k in range(1, 25) if k / 2 * travel >= 3 * np.pi]
+        if orders:
+            figs.append(_img(_figure(lambda ax: dp.order_spectrum(ax, rec.theta_m, before, after, orders,
+                                                                   "theta_m"), (6, 3)),
+                             f"{c.name}: order spectrum of the residual over the motor angle"))
+    sections.append("<h2>Where the model and the recording differ</h2>" + "".join(figs))
+
+    # The torque-torsion loop, where the transmission is involved.
+    trans = [c for c in diag.channels if "transmission" in c.parts()]
+    if trans:
+        from . import _core, parameters
+        est = _core.compliance(parameters.for_estimator(p1), rec.i_m, rec.theta_m, rec.theta_l)
+        reference = diag.reference_torque(p1)
+        sections.append("<h2>Torque against torsion</h2>" + _img(
+            _figure(lambda ax: dp.torque_torsion_loop(ax, est["dtheta_f"], reference, est["tau_compliance"]),
+                    (6, 4)), "Reference torque vs flexspline torsion: loops mean hysteresis, flats backlash"))
+
+    # Findings.
+    if doc["findings"]:
+        rows = [(f["effect"], f["where"]["part"], f["confidence"], _fmt(f["fit"]["holdout_rms_before"]),
+                 _fmt(f["fit"]["holdout_rms_after"]), f["evidence"]["folds_improved"]) for f in doc["findings"]]
+        parts = ["<h2>Findings</h2>", _table(rows, ["effect", "part", "confidence", "held-out RMS before (N.m)",
+                                                    "after (N.m)", "folds improved"])]
+        for f in doc["findings"]:
+            ev = f["evidence"]
+            parts.append(f"<h3>{html.escape(f['effect'])}</h3><p><b>Left out:</b> {html.escape(ev['physics_left_out'])}."
+                         f" <b>Model added:</b> {html.escape(f['model'])}.</p>"
+                         f"<p><b>Where:</b> {html.escape(json.dumps(f['where'], default=str))}</p>"
+                         f"<p><b>Evidence:</b> held-out gain {100 * ev['held_out_gain']:.2f} % (z = {ev['z']}),"
+                         f" ΔBIC {ev['delta_bic']}, runner-up {html.escape(json.dumps(ev['runner_up']))}.</p>"
+                         f"<p><b>Parameters:</b> {html.escape(', '.join(f'{k} = {_fmt(v)}' for k, v in f['parameters'].items()))}</p>")
+        sections.append("".join(parts))
+
+    # Fit before/after and the estimator.
+    labels = [c.name for c in diag.channels]
+    rb = [float(np.sqrt(np.nanmean(diag.eval.residual(c, p0)[diag.test] ** 2))) for c in diag.channels]
+    ra = [float(np.sqrt(np.nanmean(diag.eval.residual(c, p1)[diag.test] ** 2))) for c in diag.channels]
+    fit_html = _img(_figure(lambda ax: dp.rms_bars(ax, labels, rb, ra, "held-out RMS residual (N.m)"), (6, 3)),
+                    "Held-out residual RMS per channel: calibrated nominal vs corrected model")
+    if doc.get("estimator"):
+        e = doc["estimator"]
+        rows = [(name, _fmt(e["nominal"][name]["rms"]), _fmt(e["corrected"][name]["rms"]),
+                 _fmt(e["nominal"][name]["max"]), _fmt(e["corrected"][name]["max"]))
+                for name in ("tau_compliance", "tau_ukf") if "error" not in e["nominal"]]
+        fit_html += "<h3>Torque estimators against the torque sensor</h3>" + _table(
+            rows, ["estimate", "RMS nominal", "RMS corrected", "max nominal", "max corrected"])
+    sections.append("<h2>Fit before and after</h2>" + fit_html)
+
+    cal = [(n, _fmt(v["nominal"]), _fmt(v["calibrated"])) for n, v in doc["calibration"].items()]
+    sections.append("<h2>Calibration of the nominal parameters</h2>" + _table(cal, ["parameter", "nominal",
+                                                                                     "calibrated"]))
+    if doc["unexplained"]:
+        sections.append("<h2>Unexplained structure</h2>" + _table(
+            [(u["channel"], u["feature"], u["held_out_gain"], u["largest_at"]) for u in doc["unexplained"]],
+            ["channel", "feature", "held-out gain", "largest at"]))
+    if doc["not_testable"]:
+        sections.append("<h2>Not testable on this recording</h2>" + _table(
+            [(n["effect"], n["reason"]) for n in doc["not_testable"]], ["effect", "why"]))
+
+    title = f"hdjoint diagnosis: {doc['verdict']}"
+    return ("<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>" + html.escape(title) +
+            "</title><style>body{font-family:sans-serif;max-width:70em;margin:1.5em auto;color:#222}"
+            "table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:.2em .5em}"
+            "img{max-width:100%}figure{margin:.5em 0}figcaption{font-size:.85em;color:#555}"
+            ".verdict{font-size:1.2em;padding:.5em;background:#eef}</style></head><body>"
+            f"<h1>{html.escape(title)}</h1><p class='verdict'>{html.escape(VERDICT_TEXT[doc['verdict']])}</p>"
+            f"<p>Recording: {html.escape(str(doc['recording']))}; diagnosed in {doc.get('seconds', '?')} s.</p>"
+            + "".join(sections) + "</body></html>")
