@@ -14,6 +14,8 @@ const ParameterInfo kTable[] = {
 #undef HDJ_PARAMETER
 };
 constexpr std::size_t kCount = sizeof(kTable) / sizeof(kTable[0]);
+// A parameter's value reference is its index; the FMUs number inputs from 100.
+static_assert(kCount < 100, "parameter value references would collide with the FMUs' inputs (100+)");
 }  // namespace
 
 const ParameterInfo* parameter_table() { return kTable; }

@@ -10,6 +10,36 @@ constexpr double kHalfPi = 1.5707963267948966;
 constexpr double kLinearLimit = 1e-12;
 
 double sign(double x) { return (x > 0.0) - (x < 0.0); }
+
+// The extra kinematic-error harmonics a*cos(n*angle) + b*sin(n*angle). A
+// harmonic with both amplitudes zero is skipped, not added as 0: the default
+// model then costs and computes exactly what the paper's does.
+struct Harmonic {
+    double order, a, b;
+    bool on() const { return a != 0.0 || b != 0.0; }
+};
+struct Harmonics {
+    Harmonic h[2];
+    bool on() const { return h[0].on() || h[1].on(); }
+    // The sum (derivative 0), or its first (1) or second (2) derivative by the angle.
+    double operator()(double angle, int derivative) const {
+        double sum = 0.0;
+        for (const Harmonic& k : h) {
+            if (!k.on()) continue;
+            const double c = std::cos(k.order * angle), s = std::sin(k.order * angle);
+            if (derivative == 0) sum += k.a * c + k.b * s;
+            else if (derivative == 1) sum += k.order * (-k.a * s + k.b * c);
+            else sum -= k.order * k.order * (k.a * c + k.b * s);
+        }
+        return sum;
+    }
+};
+Harmonics motor_harmonics(const Parameters& p) {
+    return {{{p.ke_m1_order, p.ke_m1_a, p.ke_m1_b}, {p.ke_m2_order, p.ke_m2_a, p.ke_m2_b}}};
+}
+Harmonics link_harmonics(const Parameters& p) {
+    return {{{p.ke_l1_order, p.ke_l1_a, p.ke_l1_b}, {p.ke_l2_order, p.ke_l2_a, p.ke_l2_b}}};
+}
 }  // namespace
 
 double total_torsion(double theta_m, double theta_l, const Parameters& p) {
@@ -19,8 +49,12 @@ double total_torsion(double theta_m, double theta_l, const Parameters& p) {
 double kinematic_error(double theta_m, double theta_l, const Parameters& p) {
     const double l = p.omega_l * theta_l;
     const double w = p.omega_w * theta_m;
-    return p.a0 + p.al1 * std::cos(l) + p.bl1 * std::sin(l) + p.aw1 * std::cos(w) +
-           p.bw1 * std::sin(w) + p.aw2 * std::cos(2.0 * w) + p.bw2 * std::sin(2.0 * w);
+    double e = p.a0 + p.al1 * std::cos(l) + p.bl1 * std::sin(l) + p.aw1 * std::cos(w) +
+               p.bw1 * std::sin(w) + p.aw2 * std::cos(2.0 * w) + p.bw2 * std::sin(2.0 * w);
+    const Harmonics hm = motor_harmonics(p), hl = link_harmonics(p);
+    if (hm.on()) e += hm(theta_m, 0);
+    if (hl.on()) e += hl(theta_l, 0);
+    return e;
 }
 
 void kinematic_error_gradient(double theta_m, double theta_l, const Parameters& p, double* d_theta_m,
@@ -30,6 +64,21 @@ void kinematic_error_gradient(double theta_m, double theta_l, const Parameters& 
     *d_theta_l = p.omega_l * (-p.al1 * std::sin(l) + p.bl1 * std::cos(l));
     *d_theta_m = p.omega_w * (-p.aw1 * std::sin(w) + p.bw1 * std::cos(w) +
                               2.0 * (-p.aw2 * std::sin(2.0 * w) + p.bw2 * std::cos(2.0 * w)));
+    const Harmonics hm = motor_harmonics(p), hl = link_harmonics(p);
+    if (hm.on()) *d_theta_m += hm(theta_m, 1);
+    if (hl.on()) *d_theta_l += hl(theta_l, 1);
+}
+
+void kinematic_error_curvature(double theta_m, double theta_l, const Parameters& p, double* dd_theta_m,
+                               double* dd_theta_l) {
+    const double l = p.omega_l * theta_l;
+    const double w = p.omega_w * theta_m;
+    *dd_theta_l = -p.omega_l * p.omega_l * (p.al1 * std::cos(l) + p.bl1 * std::sin(l));
+    *dd_theta_m = -p.omega_w * p.omega_w *
+                  (p.aw1 * std::cos(w) + p.bw1 * std::sin(w) +
+                   4.0 * (p.aw2 * std::cos(2.0 * w) + p.bw2 * std::sin(2.0 * w)));
+    *dd_theta_m += motor_harmonics(p)(theta_m, 2);
+    *dd_theta_l += link_harmonics(p)(theta_l, 2);
 }
 
 double wave_generator_torsion(double tau_w, const Parameters& p) {

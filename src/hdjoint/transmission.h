@@ -14,11 +14,15 @@ namespace hdjoint {
 // eq. (6): total torsion from the two encoder angles.
 double total_torsion(double theta_m, double theta_l, const Parameters& p);
 
-// eq. (7): kinematic error (theta_w is the motor angle theta_m), and its
-// partial derivatives by theta_m and theta_l.
+// eq. (7): kinematic error (theta_w is the motor angle theta_m), plus the
+// extra harmonics ke_m*/ke_l* (beyond the paper, off by default), and its
+// partial derivatives by theta_m and theta_l. The error is a sum of a
+// function of theta_m and one of theta_l, so its mixed derivative is zero.
 double kinematic_error(double theta_m, double theta_l, const Parameters& p);
 void kinematic_error_gradient(double theta_m, double theta_l, const Parameters& p, double* d_theta_m,
                               double* d_theta_l);
+void kinematic_error_curvature(double theta_m, double theta_l, const Parameters& p, double* dd_theta_m,
+                               double* dd_theta_l);  // second derivatives
 
 // eq. (4): torsion of the wave generator seen at the output, for a motor-side torque tau_w.
 double wave_generator_torsion(double tau_w, const Parameters& p);
