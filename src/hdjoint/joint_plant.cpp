@@ -10,7 +10,7 @@ namespace hdjoint {
 
 namespace {
 constexpr double kTwoPi = 6.283185307179586;
-constexpr double kStateVersion = 1.0;
+constexpr double kStateVersion = 2.0;
 // ROS2's L-stable choice of gamma.
 const double kGamma = 1.0 + 1.0 / std::sqrt(2.0);
 }  // namespace
@@ -42,6 +42,7 @@ bool JointPlant::initialize(double tau_ext, std::string* message) {
         if (done) break;
     }
     x_ << theta_m, 0.0, theta_l, 0.0;
+    t_ = 0.0;
     double check = 0.0;
     if (!joint_torque(x_, &check)) {
         if (message) *message = "the initial state has a singular torsion";
@@ -58,17 +59,21 @@ bool JointPlant::joint_torque(const PlantState& x, double* tau) const {
     return std::isfinite(*tau);
 }
 
-bool JointPlant::derivative(const PlantState& x, const PlantInputs& in, PlantState* dx, Matrix<4>* J) const {
+bool JointPlant::derivative(const PlantState& x, double t, const PlantInputs& in, PlantState* dx,
+                            Matrix<4>* J) const {
     const double theta_m = x(0), omega_m = x(1), theta_l = x(2), omega_l = x(3);
     const double elastic = total_torsion(theta_m, theta_l, p_) - kinematic_error(theta_m, theta_l, p_);
     double tau_f = 0.0;
     if (!transmitted_torque(elastic, p_, &tau_f)) return false;
     const double tau = tau_f + p_.Df * (omega_m / p_.N - omega_l);
+    const double scale = plant_friction_scale(t, p_);
+    double link_load = tau - p_.Bl * omega_l - p_.mgl * std::sin(theta_l) - in.tau_ext;
+    if (p_.Fl != 0.0) link_load -= link_friction(omega_l, p_);
 
     (*dx)(0) = omega_m;
-    (*dx)(1) = (p_.Kt * in.i_m - motor_friction(omega_m, p_) - tau / p_.N) / p_.Jm;
+    (*dx)(1) = (motor_torque(in.i_m, theta_m, p_) - motor_friction(omega_m, p_, scale) - tau / p_.N) / p_.Jm;
     (*dx)(2) = omega_l;
-    (*dx)(3) = (tau - p_.Bl * omega_l - p_.mgl * std::sin(theta_l) - in.tau_ext) / p_.Jl;
+    (*dx)(3) = link_load / p_.Jl;
     if (!dx->allFinite()) return false;
     if (!J) return true;
 
@@ -81,12 +86,12 @@ bool JointPlant::derivative(const PlantState& x, const PlantInputs& in, PlantSta
     const double dtau_dtheta_l = stiffness * (-1.0 - dk_dl);
     const double dtau_domega_m = p_.Df / p_.N;
     const double dtau_domega_l = -p_.Df;
-    const double c = std::cosh(omega_m / p_.omega_fc);
-    const double dfriction = p_.Fc / (p_.omega_fc * c * c) + p_.Bm;
+    const double dfriction = coulomb_friction_slope(omega_m, p_, scale) + p_.Bm;
 
     J->setZero();
     (*J)(0, 1) = 1.0;
     (*J)(1, 0) = -dtau_dtheta_m / (p_.N * p_.Jm);
+    if (cogging_on(p_)) (*J)(1, 0) += cogging_slope(theta_m, p_) / p_.Jm;
     (*J)(1, 1) = (-dfriction - dtau_domega_m / p_.N) / p_.Jm;
     (*J)(1, 2) = -dtau_dtheta_l / (p_.N * p_.Jm);
     (*J)(1, 3) = -dtau_domega_l / (p_.N * p_.Jm);
@@ -95,6 +100,7 @@ bool JointPlant::derivative(const PlantState& x, const PlantInputs& in, PlantSta
     (*J)(3, 1) = dtau_domega_m / p_.Jl;
     (*J)(3, 2) = (dtau_dtheta_l - p_.mgl * std::cos(theta_l)) / p_.Jl;
     (*J)(3, 3) = (dtau_domega_l - p_.Bl) / p_.Jl;
+    if (p_.Fl != 0.0) (*J)(3, 3) -= link_friction_slope(omega_l, p_) / p_.Jl;
     return J->allFinite();
 }
 
@@ -111,16 +117,19 @@ bool JointPlant::ros2_step(double h, const PlantInputs& in, std::string* message
         }
         return false;
     };
-    if (!derivative(x_, in, &f0, &J)) return fail("singular torsion or non-finite state");
+    // Stages at t and t + h: ROS2 stays second order for a time-dependent
+    // right-hand side without the df/dt term (it is order 2 for any Jacobian).
+    if (!derivative(x_, t_, in, &f0, &J)) return fail("singular torsion or non-finite state");
     const Eigen::PartialPivLU<Matrix<4>> W(Matrix<4>::Identity() - kGamma * h * J);
     const PlantState k1 = W.solve(f0);
-    if (!derivative(x_ + h * k1, in, &f1, nullptr)) return fail("singular torsion inside a substep");
+    if (!derivative(x_ + h * k1, t_ + h, in, &f1, nullptr)) return fail("singular torsion inside a substep");
     const PlantState k2 = W.solve(f1 - 2.0 * k1);
     const PlantState next = x_ + 1.5 * h * k1 + 0.5 * h * k2;
     if (!next.allFinite()) return fail("non-finite state");
     double tau = 0.0;  // reject a step that lands beyond the torsion asymptote, so it can be retried smaller
     if (!joint_torque(next, &tau)) return fail("singular torsion at the end of a substep");
     x_ = next;
+    t_ += h;
     return true;
 }
 
@@ -139,7 +148,7 @@ bool JointPlant::advance(double h, const PlantInputs& in, std::string* message) 
 bool JointPlant::substep(double h, const PlantInputs& in, int depth, std::string* message) {
     const PlantState before = x_;
     if (ros2_step(h, in, depth == kMaxHalvings ? message : nullptr)) return true;
-    x_ = before;
+    x_ = before;  // a failed step leaves t_ alone
     if (depth == kMaxHalvings) return false;
     return substep(0.5 * h, in, depth + 1, message) && substep(0.5 * h, in, depth + 1, message);
 }
@@ -155,11 +164,22 @@ PlantOutputs JointPlant::outputs() const {
     return o;
 }
 
-std::vector<double> JointPlant::save_state() const { return {kStateVersion, x_(0), x_(1), x_(2), x_(3)}; }
+PlantInternals JointPlant::internals() const {
+    PlantInternals r;
+    r.friction_scale = plant_friction_scale(t_, p_);
+    r.tau_friction = motor_friction(x_(1), p_, r.friction_scale);
+    if (cogging_on(p_)) r.tau_cogging = cogging_torque(x_(0), p_);
+    if (p_.Fl != 0.0) r.tau_link_friction = link_friction(x_(3), p_);
+    return r;
+}
+
+// [version, theta_m, omega_m, theta_l, omega_l, time]
+std::vector<double> JointPlant::save_state() const { return {kStateVersion, x_(0), x_(1), x_(2), x_(3), t_}; }
 
 bool JointPlant::load_state(const std::vector<double>& d) {
-    if (d.size() != 5 || d[0] != kStateVersion) return false;
+    if (d.size() != 6 || d[0] != kStateVersion) return false;
     x_ << d[1], d[2], d[3], d[4];
+    t_ = d[5];
     return true;
 }
 

@@ -32,6 +32,14 @@ struct PlantOutputs {
     double omega_l = 0.0;    // rad/s
 };
 
+// Torques inside the joint that no output shows (for analysis and diagnosis).
+struct PlantInternals {
+    double tau_friction = 0.0;       // motor-side friction, viscous included, N.m
+    double tau_cogging = 0.0;        // cogging torque on the motor, N.m
+    double tau_link_friction = 0.0;  // link-side Coulomb friction, N.m
+    double friction_scale = 1.0;     // drift and warm-up of the Coulomb+Stribeck friction
+};
+
 // Continuous state: [theta_m, omega_m, theta_l, omega_l].
 using PlantState = Vector<4>;
 
@@ -49,23 +57,29 @@ public:
 
     PlantOutputs outputs() const;
     const PlantState& state() const { return x_; }
+    double time() const { return t_; }  // since initialize(); drives the friction drift and warm-up
     const Parameters& parameters() const { return p_; }
 
     // Transmitted torque for a state; false outside the model's domain.
     bool joint_torque(const PlantState& x, double* tau) const;
 
+    PlantInternals internals() const;
+
     std::vector<double> save_state() const;
     bool load_state(const std::vector<double>& data);
 
+    // State derivative at time t (since initialize) and its Jacobian by the
+    // state (analytic; public so tests can check it against differences).
+    bool derivative(const PlantState& x, double t, const PlantInputs& in, PlantState* dx, Matrix<4>* J) const;
+
 private:
-    // State derivative and its Jacobian (analytic).
-    bool derivative(const PlantState& x, const PlantInputs& in, PlantState* dx, Matrix<4>* J) const;
     bool ros2_step(double h, const PlantInputs& in, std::string* message);
     bool substep(double h, const PlantInputs& in, int depth, std::string* message);
     static constexpr int kMaxHalvings = 10;
 
     Parameters p_;
     PlantState x_ = PlantState::Zero();
+    double t_ = 0.0;
 };
 
 // Encoder reading: whole counts (floor), 0 counts means no quantisation.

@@ -71,7 +71,9 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
     out_.dtheta_f = c.dtheta_f;
     out_.nis = update.nis;
     previous_theta_m_ = in.theta_m;
-    previous_u_ = p_.Kt * in.i_m - coulomb_friction(x(0), p_);
+    // eq. (2)'s input, with cogging, Stribeck friction and the drift when they are on.
+    const double t = static_cast<double>(samples_) * p_.Ts;
+    previous_u_ = motor_torque(in.i_m, in.theta_m, p_) - coulomb_friction(x(0), p_, friction_drift_scale(t, p_));
     ++samples_;
 
     // Report the worst thing the filter had to do on this sample.
