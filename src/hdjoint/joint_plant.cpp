@@ -26,7 +26,9 @@ JointPlant::JointPlant(const Parameters& p) : p_(p) {}
 bool JointPlant::initialize(double tau_ext, std::string* message) {
     const double theta_l = p_.theta_l0;
     const double tau = p_.mgl * std::sin(theta_l) + tau_ext;
-    const double spring = flexspline_torsion(tau, p_) + wave_generator_torsion(tau / p_.N, p_);
+    double spring = flexspline_torsion(tau, p_) + wave_generator_torsion(tau / p_.N, p_);
+    // Backlash is taken up on the loaded side.
+    if (p_.backlash > 0.0 && tau != 0.0) spring += std::copysign(0.5 * p_.backlash, tau);
     if (!std::isfinite(spring)) {
         if (message) *message = "no finite torsion carries the initial load torque";
         return false;
@@ -79,7 +81,7 @@ bool JointPlant::derivative(const PlantState& x, double t, const PlantInputs& in
 
     // d tau_f / d elastic torsion = 1 / (total compliance of the chain).
     const double compliance = flexspline_compliance(tau_f, p_) + wave_generator_compliance(tau_f / p_.N, p_) / p_.N;
-    const double stiffness = 1.0 / compliance;
+    const double stiffness = in_backlash(elastic, p_) ? 0.0 : 1.0 / compliance;  // slack: no stiffness
     double dk_dm = 0.0, dk_dl = 0.0;
     kinematic_error_gradient(theta_m, theta_l, p_, &dk_dm, &dk_dl);
     const double dtau_dtheta_m = stiffness * (1.0 / p_.N - dk_dm);

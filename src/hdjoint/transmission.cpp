@@ -111,12 +111,12 @@ ComplianceEstimate compliance_estimate(double i_m, double theta_m, double theta_
     ComplianceEstimate e;
     e.dtheta_f = total_torsion(theta_m, theta_l, p) - wave_generator_torsion(p.Kt * i_m, p) -
                  kinematic_error(theta_m, theta_l, p);
-    e.valid = flexspline_torque(e.dtheta_f, p, &e.tau);
+    e.valid = flexspline_torque(backlash_deadzone(e.dtheta_f, p), p, &e.tau);
     return e;
 }
 
 bool transmitted_torque(double elastic_torsion, const Parameters& p, double* tau) {
-    const double y = elastic_torsion;
+    const double y = backlash_deadzone(elastic_torsion, p);
     auto residual = [&](double t) { return flexspline_torsion(t, p) + wave_generator_torsion(t / p.N, p) - y; };
     // Bracket: the residual is odd-symmetric in shape and increasing; a
     // torque reaching the asymptote cannot be exceeded.

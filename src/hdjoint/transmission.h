@@ -41,7 +41,22 @@ double flexspline_compliance(double tau_f, const Parameters& p);  // d/dtau_f
 // explains it, the caller reports a singular torsion.
 bool flexspline_torque(double dtheta_f, const Parameters& p, double* tau_f);
 
-// The compliance-model estimate of eq. (3)-(8) with tau_w = Kt*i_m.
+// Lost motion (beyond the paper): a dead zone of total width b = backlash on
+// the torsion, x - b/2 above b/2, x + b/2 below -b/2, 0 inside. The identity
+// when backlash = 0.
+inline double backlash_deadzone(double torsion, const Parameters& p) {
+    if (p.backlash <= 0.0) return torsion;
+    const double half = 0.5 * p.backlash;
+    if (torsion > half) return torsion - half;
+    if (torsion < -half) return torsion + half;
+    return torsion == torsion ? 0.0 : torsion;  // NaN stays NaN
+}
+inline bool in_backlash(double torsion, const Parameters& p) {
+    return p.backlash > 0.0 && std::fabs(torsion) <= 0.5 * p.backlash;
+}
+
+// The compliance-model estimate of eq. (3)-(8) with tau_w = Kt*i_m; with
+// backlash, eq. (8) acts on the torsion beyond the dead zone.
 struct ComplianceEstimate {
     double dtheta_f = 0.0;  // flexspline torsion, rad
     double tau = 0.0;       // joint torque, N.m
@@ -50,10 +65,11 @@ struct ComplianceEstimate {
 ComplianceEstimate compliance_estimate(double i_m, double theta_m, double theta_l, const Parameters& p);
 
 // The plant's transmitted torque: solves
-//   dtheta - theta_err = flexspline_torsion(tau) + wave_generator_torsion(tau/N)
-// for tau (the wave generator carries the motor-side share tau/N). Both
-// terms rise monotonically with tau, so the root is unique; safeguarded
-// Newton. False when the torsion exceeds what any torque can produce.
+//   dtheta - theta_err - b/2*sign(tau) = flexspline_torsion(tau) + wave_generator_torsion(tau/N)
+// for tau (the wave generator carries the motor-side share tau/N; b the
+// backlash, tau = 0 inside it). Both terms rise monotonically with tau, so
+// the root is unique; safeguarded Newton. False when the torsion exceeds
+// what any torque can produce.
 bool transmitted_torque(double elastic_torsion, const Parameters& p, double* tau);
 
 }  // namespace hdjoint

@@ -9,6 +9,7 @@
 
 #include "joint_plant.h"
 #include "parameters.h"
+#include "transmission.h"
 
 namespace hdjoint {
 namespace {
@@ -29,6 +30,7 @@ Parameters every_effect_on() {
     p.cog_a = 0.003;
     p.cog_b = -0.002;
     p.Fl = 0.8;
+    p.backlash = 2e-4;
     return p;
 }
 
@@ -67,6 +69,9 @@ TEST(EffectsJacobian, MatchesFiniteDifferencesWithEveryEffectOn) {
         x(2) = theta_l;
         x(3) = 0.3 * u(rng);
         const double t = 10.0 * (u(rng) + 1.0);
+        // Not at a corner of the backlash dead zone (no derivative there).
+        const double elastic = total_torsion(x(0), x(2), p) - kinematic_error(x(0), x(2), p);
+        if (std::fabs(std::fabs(elastic) - 0.5 * p.backlash) < 2e-5) continue;
         SCOPED_TRACE(trial);
         expect_jacobian_matches(j, x, t, {2.0 * u(rng), 0.5 * u(rng)});
     }
