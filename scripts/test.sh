@@ -5,10 +5,12 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install.sh
 
-if ! [ -e /usr/include/gtest/gtest.h ]; then
-  if command -v apt-get >/dev/null; then
-    (apt-get update -qq && apt-get install -y -qq libgtest-dev) >/dev/null
-  fi
+# From Debian: GoogleTest for the C++ tests, Chromium for the report-rendering test.
+missing=()
+[ -e /usr/include/gtest/gtest.h ] || missing+=(libgtest-dev)
+command -v chromium >/dev/null || missing+=(chromium)
+if [ ${#missing[@]} -gt 0 ] && command -v apt-get >/dev/null; then
+  (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}") >/dev/null
 fi
 cmake -S . -B build/cpp-tests -G Ninja -DHDJOINT_BUILD_TESTS=ON -DHDJOINT_BUILD_FMUS=OFF \
     -DPython_EXECUTABLE="$(command -v python3)" >/dev/null

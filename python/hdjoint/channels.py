@@ -36,12 +36,11 @@ class Prepared:
     def has_sensor(self) -> bool:
         return self.rec.tau_sensor is not None
 
-    def smoothed(self, x: np.ndarray) -> np.ndarray:
-        """x through the kinematics' smoothing filter (cached per array)."""
-        key = id(x)
-        if key not in self._smoothed:
-            self._smoothed[key] = self.kin.smooth(np.nan_to_num(x))
-        return self._smoothed[key]
+    def smoothed(self, name: str, x: np.ndarray) -> np.ndarray:
+        """A fixed signal of the recording (named) through the kinematics' smoothing filter, cached."""
+        if name not in self._smoothed:
+            self._smoothed[name] = self.kin.smooth(np.nan_to_num(x))
+        return self._smoothed[name]
 
 # The motor and link estimates use differentiated encoders, so they see the
 # world through the Savitzky-Golay filter: their current is smoothed the
@@ -84,10 +83,13 @@ def delayed_current(prep: Prepared, delay: float) -> np.ndarray:
 def tau_motor(prep: Prepared, p: dict[str, float]) -> np.ndarray:
     """tau_M: the link-side torque the motor equation (2) implies."""
     rec, kin = prep.rec, prep.kin
-    i = prep.smoothed(delayed_current(prep, _get(p, "i_delay")))
-    order = _get(p, "cog_order")
-    cogging = _get(p, "cog_a") * np.cos(order * rec.theta_m) + _get(p, "cog_b") * np.sin(order * rec.theta_m)
-    drive = p["Kt"] * i + cogging - p["Jm"] * kin.alpha_m - motor_friction(p, kin.omega_m, prep.t_rel)
+    delay = _get(p, "i_delay")
+    i = prep.smoothed("i_m", rec.i_m) if delay == 0.0 else kin.smooth(delayed_current(prep, delay))
+    drive = p["Kt"] * i - p["Jm"] * kin.alpha_m - motor_friction(p, kin.omega_m, prep.t_rel)
+    a, b = _get(p, "cog_a"), _get(p, "cog_b")
+    if a or b:  # ripple at the motor angle's orders: through the same filter as the current
+        order = _get(p, "cog_order")
+        drive = drive + kin.smooth(a * np.cos(order * rec.theta_m) + b * np.sin(order * rec.theta_m))
     return p["N"] * drive
 
 

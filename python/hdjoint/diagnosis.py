@@ -35,7 +35,8 @@ from .structure import HeldOutGain, Order, held_out_gain_sq, order_search, scan
 
 MIN_SAMPLES = 500
 MIN_DURATION = 2.0
-FIT_SAMPLES = 12000  # training samples a fit looks at (spread over all training folds)
+FIT_SAMPLES = 12000
+FOLDS = 40  # contiguous blocks; even ones fit, odd ones are held out  # training samples a fit looks at (spread over all training folds)
 
 
 class DiagnosisError(ValueError):
@@ -101,7 +102,7 @@ class Evaluator:
     def residual(self, channel: Channel, p: dict) -> np.ndarray:
         reference = self.estimate(channel.reference, p)
         if channel.part in SMOOTHED_PARTS and channel.reference not in SMOOTHED_PARTS:
-            reference = self.prep.smoothed(reference) if channel.reference == "sensor" else \
+            reference = self.prep.smoothed("tau_sensor", reference) if channel.reference == "sensor" else \
                 self.prep.kin.smooth(np.nan_to_num(reference))
         return reference - self.estimate(channel.part, p)
 
@@ -151,7 +152,7 @@ class Diagnosis:
         self.channels = channels_for(self.has_sensor)
         self.eval = Evaluator(self.prep, self.channels)
         n = len(rec)
-        self.fold = make_folds(n, 10)
+        self.fold = make_folds(n, FOLDS)
         self.train = self.fold % 2 == 0
         self.test = ~self.train
         stride = max(1, int(np.count_nonzero(self.train) // FIT_SAMPLES))
@@ -161,6 +162,7 @@ class Diagnosis:
         self.not_testable: list[dict] = []
         self.calibration: dict[str, tuple[float, float]] = {}
         self.a0_shift = 0.0
+        self.tested: list[dict] = []  # every hypothesis tried, per round (evidence for the report)
 
     # ---- fitting -------------------------------------------------------------
     def _channels_of(self, part: str) -> list[Channel]:
@@ -318,7 +320,9 @@ class Diagnosis:
         acf /= acf[0]
         below = np.flatnonzero(acf < math.exp(-1))
         length = int(below[0]) if len(below) else 2000
-        return len(r) / max(length, 1)
+        # Slow structure (the very thing being tested) lengthens the
+        # correlation; the noise itself is correlated only over the smoothing window.
+        return len(r) / max(1, min(length, self.prep.kin.smooth.window))
 
     def _try(self, effect: Effect, p: dict) -> Finding | None:
         channels = self._channels_of(effect.part)
@@ -354,6 +358,9 @@ class Diagnosis:
             self.say(f"testing {len(candidates)} hypotheses ({', '.join(e.id for e in candidates)})")
             tried = [f for f in (self._try(e, p) for e in candidates) if f is not None]
             tried.sort(key=lambda f: -f.gain.gain)
+            self.tested.append([{"effect": f.effect.id, "held_out_gain": round(f.gain.gain, 5),
+                                 "z": round(f.gain.z, 2), "delta_bic": round(f.delta_bic, 1),
+                                 "accepted": _accept(f)} for f in tried])
             accepted = [f for f in tried if _accept(f)]
             if not accepted:
                 break

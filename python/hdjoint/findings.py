@@ -166,6 +166,7 @@ def document(diag, final_params: dict, unexplained: list[dict]) -> dict:
         "params": final_params,
         "calibration": {n: {"nominal": a, "calibrated": b} for n, (a, b) in diag.calibration.items()},
         "not_testable": diag.not_testable,
+        "hypotheses_tested": diag.tested,
         "unexplained": unexplained,
         "noise": {c: round(s, 6) for c, s in diag.sigma.items()},
         "estimator": estimator_comparison(diag, final_params),

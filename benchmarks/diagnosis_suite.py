@@ -1,0 +1,75 @@
+"""The diagnosis on concealed effects: for every case of hdjoint.cases
+(every effect ID, several at once, and controls), simulate the joint,
+diagnose it against the nominal model, and print
+  - the confusion table (effect named vs effect present),
+  - false alarms on the controls,
+  - held-out improvement of the named findings,
+  - the time per case.
+Run: python benchmarks/diagnosis_suite.py [--duration 30] [--markdown]
+"""
+from __future__ import annotations
+
+import argparse
+import time
+
+from hdjoint.cases import CASES, nominal_for, record
+from hdjoint.diagnosis import diagnose
+from hdjoint.effects import EFFECTS
+
+
+def run_case(case, duration):
+    rec = record(case, duration)
+    start = time.perf_counter()
+    _, doc = diagnose(rec, nominal_for(case))
+    return doc, time.perf_counter() - start
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--duration", type=float, default=30.0, help="seconds per recording")
+    ap.add_argument("--only", help="run only cases whose name contains this")
+    args = ap.parse_args()
+    rows = []
+    for case in CASES:
+        if args.only and args.only not in case.name:
+            continue
+        doc, seconds = run_case(case, args.duration)
+        named = [f["effect"] for f in doc["findings"]]
+        hits = [e for e in case.present if e in named]
+        extra = [e for e in named if e not in case.present]
+        gains = {f["effect"]: (f["fit"]["holdout_rms_before"], f["fit"]["holdout_rms_after"]) for f in doc["findings"]}
+        rows.append((case, doc["verdict"], named, hits, extra, gains, seconds))
+        print(f"{case.name:<52} verdict {doc['verdict']:<16} named {named or '-'}  ({seconds:.1f} s)", flush=True)
+
+    print("\n| case | present | named (confidence) | verdict | held-out RMS before -> after (N.m) | time (s) |")
+    print("|---|---|---|---|---|---|")
+    for case, verdict, named, hits, extra, gains, seconds in rows:
+        present = ", ".join(case.present) or "nothing (control)"
+        names = ", ".join(named) or "-"
+        fit = "; ".join(f"{e}: {b:.3f} -> {a:.3f}" for e, (b, a) in gains.items()) or "-"
+        print(f"| {case.name} | {present} | {names} | {verdict} | {fit} | {seconds:.1f} |")
+
+    effects = list(EFFECTS)
+    print("\nConfusion (rows: effect present, columns: effect named; single-effect cases):")
+    print("| present \\ named | " + " | ".join(e.replace("_", " ") for e in effects) + " | none |")
+    print("|---" * (len(effects) + 2) + "|")
+    for case, verdict, named, *_ in rows:
+        if len(case.present) != 1:
+            continue
+        cells = ["x" if e in named else "" for e in effects]
+        print(f"| {case.present[0]} | " + " | ".join(cells) + f" | {'x' if not named else ''} |")
+    controls = [r for r in rows if not r[0].present]
+    single = [r for r in rows if len(r[0].present) == 1]
+    multi = [r for r in rows if len(r[0].present) > 1]
+    print(f"\nsingle-effect cases with the effect named first: "
+          f"{sum(1 for r in single if r[2][:1] == list(r[0].present))}/{len(single)}; "
+          f"named anywhere: {sum(1 for r in single if r[3])}/{len(single)}")
+    print(f"false alarms on controls: {sum(1 for r in controls if r[2])}/{len(controls)} "
+          f"(verdicts: {', '.join(r[1] for r in controls)})")
+    for r in multi:
+        print(f"multi-effect case '{r[0].name}': {len(r[3])}/{len(r[0].present)} named, {len(r[4])} extra")
+    print(f"mean time per {args.duration:.0f} s recording: {sum(r[6] for r in rows) / len(rows):.1f} s")
+
+
+if __name__ == "__main__":
+    main()
