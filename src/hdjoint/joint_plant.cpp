@@ -10,7 +10,15 @@ namespace hdjoint {
 
 namespace {
 constexpr double kTwoPi = 6.283185307179586;
-constexpr double kStateVersion = 2.0;
+constexpr double kStateVersion = 3.0;
+// Floor of the LuGre friction level g(w), N.m: keeps z/g finite when Fc = Fs = 0.
+constexpr double kMinLuGreLevel = 1e-9;
+// The LuGre law's |w| is regularised as sqrt(w^2 + eps^2), eps = this times
+// omega_fc: a right-hand side that is smooth through rest keeps ROS2's
+// linearisation valid when the motor sticks, where the stiff bristles would
+// otherwise chatter across w = 0 and drift. The price is a creep of about
+// eps under a torque below breakaway, 1000 times less than the tanh law's.
+constexpr double kLuGreRest = 1e-3;
 // ROS2's L-stable choice of gamma.
 const double kGamma = 1.0 + 1.0 / std::sqrt(2.0);
 }  // namespace
@@ -44,6 +52,7 @@ bool JointPlant::initialize(double tau_ext, std::string* message) {
         if (done) break;
     }
     x_ << theta_m, 0.0, theta_l, 0.0;
+    z_.setZero();  // no hysteresis torque, relaxed bristles
     t_ = 0.0;
     double check = 0.0;
     if (!joint_torque(x_, &check)) {
@@ -53,42 +62,107 @@ bool JointPlant::initialize(double tau_ext, std::string* message) {
     return true;
 }
 
-bool JointPlant::joint_torque(const PlantState& x, double* tau) const {
+bool JointPlant::joint_torque(const PlantState& x, double* tau) const { return torque(x, z_, tau); }
+
+bool JointPlant::torque(const PlantState& x, const Vector<3>& z, double* tau) const {
     const double elastic = total_torsion(x(0), x(2), p_) - kinematic_error(x(0), x(2), p_);
     double tau_f = 0.0;
     if (!transmitted_torque(elastic, p_, &tau_f)) return false;
     *tau = tau_f + p_.Df * (x(1) / p_.N - x(3));
+    if (p_.hys_H > 0.0) *tau += z(0);
+    if (p_.bw_A > 0.0) *tau += z(1);
     return std::isfinite(*tau);
 }
 
-bool JointPlant::derivative(const PlantState& x, double t, const PlantInputs& in, PlantState* dx,
-                            Matrix<4>* J) const {
+// Each law pulls its state back inside a bound (+-H, +-A/(beta + gamma),
+// +-max g/sigma0) and never lets it grow beyond: a step is plausible when no
+// state ends beyond both its bound and where it started.
+bool JointPlant::within_bounds(const Vector<3>& z, double h) const {
+    constexpr double kSlack = 1.01;
+    auto fits = [&](int k, double bound) { return std::fabs(z(k)) <= kSlack * std::max(bound, std::fabs(z_(k))); };
+    if (p_.hys_H > 0.0 && !fits(0, p_.hys_H)) return false;
+    if (p_.bw_A > 0.0 && p_.bw_beta + p_.bw_gamma > 0.0 && !fits(1, p_.bw_A / (p_.bw_beta + p_.bw_gamma)))
+        return false;
+    if (p_.lugre_sigma0 > 0.0) {
+        // The friction scale is monotone over a substep: its larger end bounds it.
+        const double scale = std::max(plant_friction_scale(t_, p_), plant_friction_scale(t_ + h, p_));
+        const double g_max = std::max((p_.Fc + p_.Fs) * scale, kMinLuGreLevel);
+        if (!fits(2, g_max / p_.lugre_sigma0)) return false;
+    }
+    return true;
+}
+
+PlantFullState JointPlant::full_state() const {
+    PlantFullState x;
+    x << x_, z_;
+    return x;
+}
+
+bool JointPlant::derivative(const PlantFullState& x, double t, const PlantInputs& in, PlantFullState* dx,
+                            PlantJacobian* J) const {
+    return model<kPlantStates>(x, t, in, dx, J);
+}
+
+template <int S>
+bool JointPlant::model(const Vector<S>& x, double t, const PlantInputs& in, Vector<S>* dx, Matrix<S>* J) const {
+    static_assert(S == 4 || S == kPlantStates, "the plant has 4 mechanical and 3 effect states");
+    constexpr bool kFull = S == kPlantStates;
     const double theta_m = x(0), omega_m = x(1), theta_l = x(2), omega_l = x(3);
     const double elastic = total_torsion(theta_m, theta_l, p_) - kinematic_error(theta_m, theta_l, p_);
     double tau_f = 0.0;
     if (!transmitted_torque(elastic, p_, &tau_f)) return false;
-    const double tau = tau_f + p_.Df * (omega_m / p_.N - omega_l);
+    double tau = tau_f + p_.Df * (omega_m / p_.N - omega_l);
     const double scale = plant_friction_scale(t, p_);
+    const bool dahl = kFull && p_.hys_H > 0.0, bouc_wen = kFull && p_.bw_A > 0.0;
+    const bool lugre = kFull && p_.lugre_sigma0 > 0.0;
+
+    // The effect states: hysteresis driven by the rate of the elastic torsion,
+    // LuGre bristles by the motor speed.
+    double dk_dm = 0.0, dk_dl = 0.0, rate = 0.0;
+    double friction = 0.0, level = 0.0, speed = 0.0, dz_lugre = 0.0;
+    if (dahl || bouc_wen) {
+        kinematic_error_gradient(theta_m, theta_l, p_, &dk_dm, &dk_dl);
+        rate = omega_m / p_.N - omega_l - dk_dm * omega_m - dk_dl * omega_l;
+    }
+    if constexpr (kFull) {
+        if (dahl) tau += x(4);
+        if (bouc_wen) tau += x(5);
+    }
+    if (lugre) {
+        // g(w) held above a floor: with no Coulomb level the bristles just stay at zero.
+        level = std::max(friction_level(omega_m, p_) * scale, kMinLuGreLevel);
+        speed = std::hypot(omega_m, kLuGreRest * p_.omega_fc);
+        dz_lugre = omega_m - p_.lugre_sigma0 * speed * x(S - 1) / level;
+        friction = p_.lugre_sigma0 * x(S - 1) + p_.lugre_sigma1 * dz_lugre + p_.Bm * omega_m;
+    } else {
+        friction = motor_friction(omega_m, p_, scale);
+    }
     double link_load = tau - p_.Bl * omega_l - p_.mgl * std::sin(theta_l) - in.tau_ext;
     if (p_.Fl != 0.0) link_load -= link_friction(omega_l, p_);
 
     (*dx)(0) = omega_m;
-    (*dx)(1) = (motor_torque(in.i_m, theta_m, p_) - motor_friction(omega_m, p_, scale) - tau / p_.N) / p_.Jm;
+    (*dx)(1) = (motor_torque(in.i_m, theta_m, p_) - friction - tau / p_.N) / p_.Jm;
     (*dx)(2) = omega_l;
     (*dx)(3) = link_load / p_.Jl;
+    if constexpr (kFull) {
+        (*dx)(4) = dahl ? p_.hys_sigma * (rate - std::fabs(rate) * x(4) / p_.hys_H) : 0.0;
+        (*dx)(5) = bouc_wen ? p_.bw_A * rate - p_.bw_beta * std::fabs(rate) * x(5) -
+                                  p_.bw_gamma * rate * std::fabs(x(5))
+                            : 0.0;
+        (*dx)(6) = lugre ? dz_lugre : 0.0;
+    }
     if (!dx->allFinite()) return false;
     if (!J) return true;
 
     // d tau_f / d elastic torsion = 1 / (total compliance of the chain).
     const double compliance = flexspline_compliance(tau_f, p_) + wave_generator_compliance(tau_f / p_.N, p_) / p_.N;
     const double stiffness = in_backlash(elastic, p_) ? 0.0 : 1.0 / compliance;  // slack: no stiffness
-    double dk_dm = 0.0, dk_dl = 0.0;
     kinematic_error_gradient(theta_m, theta_l, p_, &dk_dm, &dk_dl);
     const double dtau_dtheta_m = stiffness * (1.0 / p_.N - dk_dm);
     const double dtau_dtheta_l = stiffness * (-1.0 - dk_dl);
     const double dtau_domega_m = p_.Df / p_.N;
     const double dtau_domega_l = -p_.Df;
-    const double dfriction = coulomb_friction_slope(omega_m, p_, scale) + p_.Bm;
+    const double dfriction = lugre ? 0.0 : coulomb_friction_slope(omega_m, p_, scale) + p_.Bm;
 
     J->setZero();
     (*J)(0, 1) = 1.0;
@@ -103,12 +177,54 @@ bool JointPlant::derivative(const PlantState& x, double t, const PlantInputs& in
     (*J)(3, 2) = (dtau_dtheta_l - p_.mgl * std::cos(theta_l)) / p_.Jl;
     (*J)(3, 3) = (dtau_domega_l - p_.Bl) / p_.Jl;
     if (p_.Fl != 0.0) (*J)(3, 3) -= link_friction_slope(omega_l, p_) / p_.Jl;
+    if constexpr (kFull) {
+        // The hysteresis torques enter tau like the elastic torque.
+        for (int k : {4, 5}) {
+            if (!(k == 4 ? dahl : bouc_wen)) continue;
+            (*J)(1, k) = -1.0 / (p_.N * p_.Jm);
+            (*J)(3, k) = 1.0 / p_.Jl;
+        }
+        if (dahl || bouc_wen) {
+            // Gradient of the torsion rate by [theta_m, omega_m, theta_l, omega_l].
+            double dd_m = 0.0, dd_l = 0.0;
+            kinematic_error_curvature(theta_m, theta_l, p_, &dd_m, &dd_l);
+            const double drate[4] = {-dd_m * omega_m, 1.0 / p_.N - dk_dm, -dd_l * omega_l, -1.0 - dk_dl};
+            const double sign_rate = (rate > 0.0) - (rate < 0.0);
+            if (dahl) {
+                const double by_rate = p_.hys_sigma * (1.0 - sign_rate * x(4) / p_.hys_H);
+                for (int c = 0; c < 4; ++c) (*J)(4, c) = by_rate * drate[c];
+                (*J)(4, 4) = -p_.hys_sigma * std::fabs(rate) / p_.hys_H;
+            }
+            if (bouc_wen) {
+                const double z = x(5);
+                const double sign_z = (z > 0.0) - (z < 0.0);
+                const double by_rate = p_.bw_A - p_.bw_beta * sign_rate * z - p_.bw_gamma * std::fabs(z);
+                for (int c = 0; c < 4; ++c) (*J)(5, c) = by_rate * drate[c];
+                (*J)(5, 5) = -p_.bw_beta * std::fabs(rate) - p_.bw_gamma * rate * sign_z;
+            }
+        }
+        if (lugre) {
+            // dz/dt = w - sigma0*|w|*z/g(w), F = sigma0*z + sigma1*dz/dt + Bm*w.
+            const double z = x(6);
+            const double dlevel = level > kMinLuGreLevel ? friction_level_slope(omega_m, p_) * scale : 0.0;
+            const double ddz_dw =
+                1.0 - p_.lugre_sigma0 * z * (omega_m / speed / level - speed * dlevel / (level * level));
+            const double ddz_dz = -p_.lugre_sigma0 * speed / level;
+            (*J)(6, 1) = ddz_dw;
+            (*J)(6, 6) = ddz_dz;
+            (*J)(1, 1) -= (p_.lugre_sigma1 * ddz_dw + p_.Bm) / p_.Jm;
+            (*J)(1, 6) = -(p_.lugre_sigma0 + p_.lugre_sigma1 * ddz_dz) / p_.Jm;
+        }
+    }
     return J->allFinite();
 }
 
+template <int S>
 bool JointPlant::ros2_step(double h, const PlantInputs& in, std::string* message) {
-    PlantState f0, f1;
-    Matrix<4> J;
+    Vector<S> x0, f0, f1;
+    if constexpr (S == 4) x0 = x_;
+    else x0 << x_, z_;
+    Matrix<S> J;
     auto fail = [&](const char* what) {
         if (message) {
             std::ostringstream s;
@@ -121,16 +237,24 @@ bool JointPlant::ros2_step(double h, const PlantInputs& in, std::string* message
     };
     // Stages at t and t + h: ROS2 stays second order for a time-dependent
     // right-hand side without the df/dt term (it is order 2 for any Jacobian).
-    if (!derivative(x_, t_, in, &f0, &J)) return fail("singular torsion or non-finite state");
-    const Eigen::PartialPivLU<Matrix<4>> W(Matrix<4>::Identity() - kGamma * h * J);
-    const PlantState k1 = W.solve(f0);
-    if (!derivative(x_ + h * k1, t_ + h, in, &f1, nullptr)) return fail("singular torsion inside a substep");
-    const PlantState k2 = W.solve(f1 - 2.0 * k1);
-    const PlantState next = x_ + 1.5 * h * k1 + 0.5 * h * k2;
+    if (!model<S>(x0, t_, in, &f0, &J)) return fail("singular torsion or non-finite state");
+    const Eigen::PartialPivLU<Matrix<S>> W(Matrix<S>::Identity() - kGamma * h * J);
+    const Vector<S> k1 = W.solve(f0);
+    if (!model<S>(x0 + h * k1, t_ + h, in, &f1, nullptr)) return fail("singular torsion inside a substep");
+    const Vector<S> k2 = W.solve(f1 - 2.0 * k1);
+    const Vector<S> next = x0 + 1.5 * h * k1 + 0.5 * h * k2;
     if (!next.allFinite()) return fail("non-finite state");
+    Vector<3> z_next = z_;
+    if constexpr (S == kPlantStates) {
+        z_next = next.template tail<3>();
+        // A step that breaks what the exact laws guarantee has lost the stiff
+        // dynamics: retried in halves.
+        if (!within_bounds(z_next, h)) return fail("hysteresis or bristle state beyond its bound");
+    }
     double tau = 0.0;  // reject a step that lands beyond the torsion asymptote, so it can be retried smaller
-    if (!joint_torque(next, &tau)) return fail("singular torsion at the end of a substep");
-    x_ = next;
+    if (!torque(next.template head<4>(), z_next, &tau)) return fail("singular torsion at the end of a substep");
+    x_ = next.template head<4>();
+    z_ = z_next;
     t_ += h;
     return true;
 }
@@ -149,8 +273,12 @@ bool JointPlant::advance(double h, const PlantInputs& in, std::string* message) 
 // 1/1024 of a substep, before the plant reports failure.
 bool JointPlant::substep(double h, const PlantInputs& in, int depth, std::string* message) {
     const PlantState before = x_;
-    if (ros2_step(h, in, depth == kMaxHalvings ? message : nullptr)) return true;
+    const Vector<3> z_before = z_;
+    const bool ok = extra_states() ? ros2_step<kPlantStates>(h, in, depth == kMaxHalvings ? message : nullptr)
+                                   : ros2_step<4>(h, in, depth == kMaxHalvings ? message : nullptr);
+    if (ok) return true;
     x_ = before;  // a failed step leaves t_ alone
+    z_ = z_before;
     if (depth == kMaxHalvings) return false;
     return substep(0.5 * h, in, depth + 1, message) && substep(0.5 * h, in, depth + 1, message);
 }
@@ -172,16 +300,29 @@ PlantInternals JointPlant::internals() const {
     r.tau_friction = motor_friction(x_(1), p_, r.friction_scale);
     if (cogging_on(p_)) r.tau_cogging = cogging_torque(x_(0), p_);
     if (p_.Fl != 0.0) r.tau_link_friction = link_friction(x_(3), p_);
+    if (p_.lugre_sigma0 > 0.0) {
+        PlantFullState dx;
+        r.tau_friction = derivative(full_state(), t_, {}, &dx, nullptr)
+                             ? p_.lugre_sigma0 * z_(2) + p_.lugre_sigma1 * dx(6) + p_.Bm * x_(1)
+                             : std::nan("");
+    }
+    if (p_.hys_H > 0.0) r.z_dahl = z_(0);
+    if (p_.bw_A > 0.0) r.z_bouc_wen = z_(1);
+    if (p_.lugre_sigma0 > 0.0) r.z_lugre = z_(2);
+    r.elastic_torsion = total_torsion(x_(0), x_(2), p_) - kinematic_error(x_(0), x_(2), p_);
     return r;
 }
 
-// [version, theta_m, omega_m, theta_l, omega_l, time]
-std::vector<double> JointPlant::save_state() const { return {kStateVersion, x_(0), x_(1), x_(2), x_(3), t_}; }
+// [version, theta_m, omega_m, theta_l, omega_l, time, z_dahl, z_bouc_wen, z_lugre]
+std::vector<double> JointPlant::save_state() const {
+    return {kStateVersion, x_(0), x_(1), x_(2), x_(3), t_, z_(0), z_(1), z_(2)};
+}
 
 bool JointPlant::load_state(const std::vector<double>& d) {
-    if (d.size() != 6 || d[0] != kStateVersion) return false;
+    if (d.size() != 9 || d[0] != kStateVersion) return false;
     x_ << d[1], d[2], d[3], d[4];
     t_ = d[5];
+    z_ << d[6], d[7], d[8];
     return true;
 }
 

@@ -7,10 +7,17 @@
 // 1999; L-stable, second order for any Jacobian) on fixed substeps of at most
 // `max_step`. Why: the torsional resonance (tens of Hz) is resolved with
 // hundreds of substeps per period, and friction laws with a steep slope at
-// zero speed (smoothed Coulomb, and the stiff bristle dynamics of friction
-// models added later) are stiff; an explicit method goes unstable there,
-// ROS2 damps them like the physics does. It needs one 4x4 LU a substep and
-// no Newton iterations, so its cost is fixed and state save/restore exact.
+// zero speed (smoothed Coulomb, the LuGre bristles) are stiff; an explicit
+// method goes unstable there, ROS2 damps them like the physics does. It
+// needs one LU a substep and no Newton iterations, so its cost is fixed and
+// state save/restore exact.
+//
+// Beyond the paper (each off by default): the friction and cogging of
+// friction.h, backlash, and three states of their own -- Dahl hysteresis
+// (hys_H), Bouc-Wen hysteresis (bw_A) in the transmission and LuGre motor
+// friction (lugre_sigma0). Only when one of these is on does the plant
+// integrate its 7 states (a 7x7 LU); otherwise the 4 mechanical ones, as the
+// paper's model.
 #include <string>
 #include <vector>
 
@@ -38,10 +45,18 @@ struct PlantInternals {
     double tau_cogging = 0.0;        // cogging torque on the motor, N.m
     double tau_link_friction = 0.0;  // link-side Coulomb friction, N.m
     double friction_scale = 1.0;     // drift and warm-up of the Coulomb+Stribeck friction
+    double z_dahl = 0.0;             // Dahl hysteresis torque in the transmission, N.m
+    double z_bouc_wen = 0.0;         // Bouc-Wen hysteresis torque in the transmission, N.m
+    double z_lugre = 0.0;            // LuGre bristle deflection, rad
+    double elastic_torsion = 0.0;    // theta_m/N - theta_l - theta_err, rad
 };
 
-// Continuous state: [theta_m, omega_m, theta_l, omega_l].
+// Mechanical state: [theta_m, omega_m, theta_l, omega_l].
 using PlantState = Vector<4>;
+// With the states of the beyond-paper effects: [..., z_dahl, z_bouc_wen, z_lugre].
+constexpr int kPlantStates = 7;
+using PlantFullState = Vector<kPlantStates>;
+using PlantJacobian = Matrix<kPlantStates>;
 
 class JointPlant {
 public:
@@ -57,10 +72,12 @@ public:
 
     PlantOutputs outputs() const;
     const PlantState& state() const { return x_; }
+    PlantFullState full_state() const;
     double time() const { return t_; }  // since initialize(); drives the friction drift and warm-up
     const Parameters& parameters() const { return p_; }
 
-    // Transmitted torque for a state; false outside the model's domain.
+    // Transmitted torque for a state (with the plant's present hysteresis
+    // torque); false outside the model's domain.
     bool joint_torque(const PlantState& x, double* tau) const;
 
     PlantInternals internals() const;
@@ -70,15 +87,24 @@ public:
 
     // State derivative at time t (since initialize) and its Jacobian by the
     // state (analytic; public so tests can check it against differences).
-    bool derivative(const PlantState& x, double t, const PlantInputs& in, PlantState* dx, Matrix<4>* J) const;
+    bool derivative(const PlantFullState& x, double t, const PlantInputs& in, PlantFullState* dx,
+                    PlantJacobian* J) const;
 
 private:
+    // The model on S = 4 (mechanical) or S = 7 (all) states.
+    template <int S>
+    bool model(const Vector<S>& x, double t, const PlantInputs& in, Vector<S>* dx, Matrix<S>* J) const;
+    template <int S>
     bool ros2_step(double h, const PlantInputs& in, std::string* message);
+    bool torque(const PlantState& x, const Vector<3>& z, double* tau) const;
+    bool within_bounds(const Vector<3>& z, double h) const;
+    bool extra_states() const { return p_.hys_H > 0.0 || p_.bw_A > 0.0 || p_.lugre_sigma0 > 0.0; }
     bool substep(double h, const PlantInputs& in, int depth, std::string* message);
     static constexpr int kMaxHalvings = 10;
 
     Parameters p_;
     PlantState x_ = PlantState::Zero();
+    Vector<3> z_ = Vector<3>::Zero();  // z_dahl, z_bouc_wen, z_lugre
     double t_ = 0.0;
 };
 

@@ -9,7 +9,7 @@
 namespace hdjoint {
 
 namespace {
-constexpr double kStateVersion = 1.0;
+constexpr double kStateVersion = 2.0;
 
 std::string describe_input(const EstimatorInputs& in) {
     std::ostringstream s;
@@ -22,7 +22,7 @@ std::string describe_input(const EstimatorInputs& in) {
 }  // namespace
 
 TorqueEstimator::TorqueEstimator(const Parameters& p)
-    : p_(p), system_(p, p.Ts), measurement_(p) {
+    : p_(p), system_(p, p.Ts), measurement_(p), compliance_(p) {
     Q_.diagonal() << p.ukf_q_omega * p.ukf_q_omega, p.ukf_q_tau * p.ukf_q_tau;
     R_.diagonal() << p.ukf_r_omega * p.ukf_r_omega, p.ukf_r_torsion * p.ukf_r_torsion;
     Matrix<2> P0 = Matrix<2>::Zero();
@@ -36,13 +36,13 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
         if (message) *message = describe_input(in);
         return EstimatorStatus::InvalidInput;
     }
-    const ComplianceEstimate c = compliance_estimate(in.i_m, in.theta_m, in.theta_l, p_);
+    const ComplianceSample c = compliance_.step(in.i_m, in.theta_m, in.theta_l);
     if (!c.valid) {
         if (message) {
             std::ostringstream s;
             s.precision(17);
             s << "singular torsion: dtheta_f = " << c.dtheta_f << " rad gives |Cf*Kf*dtheta_f| = "
-              << std::fabs(p_.Cf * p_.Kf * c.dtheta_f)
+              << std::fabs(p_.Cf * p_.Kf * backlash_deadzone(c.dtheta_f, p_))
               << " >= pi/2 (theta_m = " << in.theta_m << ", theta_l = " << in.theta_l
               << "); check N, a0 (encoder offsets), Kf and Cf";
             *message = s.str();
@@ -60,7 +60,7 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
         speed = (in.theta_m - previous_theta_m_) / p_.Ts;
     }
     Vector<2> z;
-    z << speed, c.dtheta_f;
+    z << speed, c.torsion;
     const auto update = ukf_.update(measurement_, z, R_);
 
     const Vector<2>& x = ukf_.state();
@@ -70,6 +70,7 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
     out_.tau_compliance = c.tau;
     out_.dtheta_f = c.dtheta_f;
     out_.nis = update.nis;
+    out_.hysteresis_torque = c.z;
     previous_theta_m_ = in.theta_m;
     // eq. (2)'s input, with cogging, Stribeck friction and the drift when they are on.
     const double t = static_cast<double>(samples_) * p_.Ts;
@@ -93,22 +94,31 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
     return EstimatorStatus::Ok;
 }
 
+// [version, UKF state (2) and covariance (4), outputs (7), previous theta_m,
+//  previous u, samples, compliance model state]
 std::vector<double> TorqueEstimator::save_state() const {
     const Vector<2>& x = ukf_.state();
     const Matrix<2>& P = ukf_.covariance();
-    return {kStateVersion, x(0), x(1), P(0, 0), P(0, 1), P(1, 0), P(1, 1),
-            out_.tau_ukf, out_.tau_compliance, out_.omega_m, out_.dtheta_f, out_.tau_ukf_std, out_.nis,
-            previous_theta_m_, previous_u_, static_cast<double>(samples_)};
+    std::vector<double> d = {kStateVersion, x(0), x(1), P(0, 0), P(0, 1), P(1, 0), P(1, 1),
+                             out_.tau_ukf, out_.tau_compliance, out_.omega_m, out_.dtheta_f, out_.tau_ukf_std,
+                             out_.nis, previous_theta_m_, previous_u_, static_cast<double>(samples_),
+                             out_.hysteresis_torque};
+    compliance_.save(&d);
+    return d;
 }
 
 bool TorqueEstimator::load_state(const std::vector<double>& d) {
-    if (d.size() != 16 || d[0] != kStateVersion) return false;
+    std::size_t cursor = 17;
+    ComplianceModel compliance = compliance_;
+    if (d.size() < cursor || d[0] != kStateVersion || !compliance.load(d, &cursor) || cursor != d.size())
+        return false;
     ukf_.state() << d[1], d[2];
     ukf_.covariance() << d[3], d[4], d[5], d[6];
-    out_ = {d[7], d[8], d[9], d[10], d[11], d[12]};
+    out_ = {d[7], d[8], d[9], d[10], d[11], d[12], d[16]};
     previous_theta_m_ = d[13];
     previous_u_ = d[14];
     samples_ = static_cast<long>(d[15]);
+    compliance_ = compliance;
     return true;
 }
 

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "compliance_model.h"
 #include "paper_ukf_models.h"
 #include "parameters.h"
 #include "ukf.h"
@@ -24,6 +25,7 @@ struct EstimatorOutputs {
     double dtheta_f = 0.0;        // rad
     double tau_ukf_std = 0.0;     // N.m
     double nis = 0.0;             // normalised innovation squared of the last update
+    double hysteresis_torque = 0.0;  // Dahl hysteresis torque inside tau_compliance, N.m (0 when off)
 };
 
 enum class EstimatorStatus {
@@ -63,6 +65,7 @@ private:
     Matrix<2> Q_ = Matrix<2>::Zero();
     Matrix<2> R_ = Matrix<2>::Zero();
     UnscentedKalmanFilter<2> ukf_;
+    ComplianceModel compliance_;
     EstimatorOutputs out_;
     double previous_theta_m_ = 0.0;
     double previous_u_ = 0.0;  // Kt*i_m - tau_fm of the previous sample

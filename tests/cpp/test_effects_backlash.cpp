@@ -111,8 +111,8 @@ TEST(EffectsBacklash, PlantStartsLoadedOnTheRightSide) {
         ASSERT_TRUE(j.joint_torque(j.state(), &tau));
         EXPECT_NEAR(tau, p.mgl * std::sin(p.theta_l0) + tau_ext, 1e-9);
         // At rest it stays (the link is held by the transmission).
-        PlantState dx;
-        ASSERT_TRUE(j.derivative(j.state(), 0.0, {0.0, tau_ext}, &dx, nullptr));
+        PlantFullState dx;
+        ASSERT_TRUE(j.derivative(j.full_state(), 0.0, {0.0, tau_ext}, &dx, nullptr));
         EXPECT_NEAR(dx(3), 0.0, 1e-8);
     }
 }
@@ -125,9 +125,9 @@ TEST(EffectsBacklash, JacobianHasNoStiffnessInsideTheBand) {
     p.mgl = 0.0;
     JointPlant j(p);
     ASSERT_TRUE(j.initialize(0.0));
-    PlantState dx;
-    Matrix<4> J;
-    ASSERT_TRUE(j.derivative(j.state(), 0.0, {0.0, 0.0}, &dx, &J));
+    PlantFullState dx;
+    PlantJacobian J;
+    ASSERT_TRUE(j.derivative(j.full_state(), 0.0, {0.0, 0.0}, &dx, &J));
     EXPECT_EQ(J(1, 0), 0.0);
     EXPECT_EQ(J(1, 2), 0.0);
     EXPECT_EQ(J(3, 0), 0.0);

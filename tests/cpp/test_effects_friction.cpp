@@ -31,8 +31,8 @@ JointPlant spinning(const Parameters& p, double w) {
 
 // d omega_m/dt of a plant state (from the model's right-hand side).
 double motor_acceleration(const JointPlant& j, double i_m) {
-    PlantState dx;
-    EXPECT_TRUE(j.derivative(j.state(), j.time(), {i_m, 0.0}, &dx, nullptr));
+    PlantFullState dx;
+    EXPECT_TRUE(j.derivative(j.full_state(), j.time(), {i_m, 0.0}, &dx, nullptr));
     return dx(1);
 }
 
