@@ -16,7 +16,8 @@ enum class FactorStatus { Ok, Repaired, Failed };
 
 template <int N>
 void symmetrize(Matrix<N>* P) {
-    *P = 0.5 * (*P + P->transpose());
+    // eval(): P + P^T read while P is written would alias (Eigen evaluates lazily).
+    *P = (0.5 * (*P + P->transpose())).eval();
 }
 
 // Lower Cholesky factor of P. When P is not numerically positive definite,

@@ -116,6 +116,7 @@ ComplianceEstimate compliance_estimate(double i_m, double theta_m, double theta_
 }
 
 bool transmitted_torque(double elastic_torsion, const Parameters& p, double* tau) {
+    if (!std::isfinite(elastic_torsion)) return false;  // NaN would fall through to "zero torque"
     const double y = backlash_deadzone(elastic_torsion, p);
     auto residual = [&](double t) { return flexspline_torsion(t, p) + wave_generator_torsion(t / p.N, p) - y; };
     // Bracket: the residual is odd-symmetric in shape and increasing; a

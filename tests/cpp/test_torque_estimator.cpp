@@ -1,0 +1,270 @@
+// The paper's estimator (torque_estimator.h) and its UKF models
+// (paper_ukf_models.h): input checks, static and constant-speed convergence,
+// state save/restore.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "friction.h"
+#include "paper_ukf_models.h"
+#include "parameters.h"
+#include "torque_estimator.h"
+#include "transmission.h"
+
+namespace hdjoint {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Encoder angles the estimator's own compliance model explains with a joint
+// torque T at motor current i_m: theta_m/N - theta_l = atan law(T) +
+// wg(Kt*i_m) + theta_err(theta_m, theta_l). Solved for theta_l at a given theta_m.
+double consistent_theta_l(double T, double i_m, double theta_m, const Parameters& p) {
+    const double spring = flexspline_torsion(T, p) + wave_generator_torsion(p.Kt * i_m, p);
+    double theta_l = theta_m / p.N - spring;
+    for (int it = 0; it < 60; ++it) theta_l = theta_m / p.N - spring - kinematic_error(theta_m, theta_l, p);
+    return theta_l;
+}
+
+EstimatorInputs static_load(double T, double theta_m, const Parameters& p) {
+    EstimatorInputs in;
+    in.i_m = T / p.N / p.Kt;  // at rest: Kt*i_m = tau_f/N
+    in.theta_m = theta_m;
+    in.theta_l = consistent_theta_l(T, in.i_m, theta_m, p);
+    return in;
+}
+
+TEST(PaperUkfModels, SystemModelIsTheExactZeroOrderHoldOfEq2) {
+    Parameters p;
+    const double Ts = 1e-3;
+    const PaperSystemModel m(p, Ts);
+    const double omega0 = 3.0, tau = 2.0, u = 0.05;
+    // omega' = (u - Bm*omega - tau/N)/Jm, tau and u held: closed form.
+    const double a = p.Bm / p.Jm;
+    const double omega_inf = (u - tau / p.N) / p.Bm;
+    const double exact = omega_inf + (omega0 - omega_inf) * std::exp(-a * Ts);
+    const Vector<2> next = m.f(Vector<2>(omega0, tau), u);
+    EXPECT_NEAR(next(0), exact, 1e-12 * std::fabs(exact));
+    EXPECT_EQ(next(1), tau);  // random walk
+    // Signs: more current speeds the motor up, more joint torque slows it down.
+    EXPECT_GT(m.f(Vector<2>(0.0, 0.0), 1.0)(0), 0.0);
+    EXPECT_LT(m.f(Vector<2>(0.0, 1.0), 0.0)(0), 0.0);
+
+    // Bm = 0: pure integration omega + Ts*(u - tau/N)/Jm.
+    p.Bm = 0.0;
+    const PaperSystemModel m0(p, Ts);
+    EXPECT_NEAR(m0.f(Vector<2>(omega0, tau), u)(0), omega0 + Ts * (u - tau / p.N) / p.Jm, 1e-12);
+}
+
+TEST(PaperUkfModels, MeasurementModelIsSpeedAndEq5Torsion) {
+    Parameters p;
+    const PaperMeasurementModel m(p);
+    for (double tau : {-20.0, -1.0, 0.0, 0.3, 12.0}) {
+        const Vector<2> z = m.h(Vector<2>(7.0, tau));
+        EXPECT_EQ(z(0), 7.0);
+        EXPECT_NEAR(z(1), std::atan(p.Cf * tau) / (p.Cf * p.Kf), 1e-18);
+    }
+}
+
+TEST(TorqueEstimator, NaNOrInfiniteInputIsRejectedAndNamed) {
+    const Parameters p;
+    struct Case {
+        double EstimatorInputs::*field;
+        const char* name;
+    };
+    for (const Case& c : {Case{&EstimatorInputs::i_m, "i_m"}, Case{&EstimatorInputs::theta_m, "theta_m"},
+                          Case{&EstimatorInputs::theta_l, "theta_l"}}) {
+        for (double bad : {kNaN, kInf, -kInf}) {
+            TorqueEstimator est(p);
+            ASSERT_EQ(est.step(static_load(1.0, 0.5, p)), EstimatorStatus::Ok);
+            const EstimatorOutputs before = est.outputs();
+            EstimatorInputs in = static_load(1.0, 0.5, p);
+            in.*(c.field) = bad;
+            std::string msg;
+            EXPECT_EQ(est.step(in, &msg), EstimatorStatus::InvalidInput) << c.name;
+            EXPECT_NE(msg.find(c.name), std::string::npos) << msg;
+            EXPECT_NE(msg.find("not finite"), std::string::npos) << msg;
+            EXPECT_FALSE(recoverable(EstimatorStatus::InvalidInput));
+            // Nothing was consumed: the sample count and outputs are unchanged.
+            EXPECT_EQ(est.samples(), 1);
+            EXPECT_EQ(est.outputs().tau_ukf, before.tau_ukf);
+            // ... and a good sample afterwards is processed.
+            EXPECT_EQ(est.step(static_load(1.0, 0.5, p)), EstimatorStatus::Ok);
+            EXPECT_EQ(est.samples(), 2);
+            EXPECT_TRUE(std::isfinite(est.outputs().tau_ukf));
+        }
+    }
+    // Works without a message pointer too.
+    TorqueEstimator est(p);
+    EstimatorInputs in;
+    in.theta_l = kNaN;
+    EXPECT_EQ(est.step(in), EstimatorStatus::InvalidInput);
+}
+
+TEST(TorqueEstimator, SingularTorsionIsReported) {
+    const Parameters p;
+    TorqueEstimator est(p);
+    ASSERT_EQ(est.step(static_load(2.0, 0.0, p)), EstimatorStatus::Ok);
+    EstimatorInputs in = static_load(2.0, 0.0, p);
+    in.theta_m += 1000.0 * p.N;  // a huge encoder offset: 1000 rad of torsion
+    std::string msg;
+    EXPECT_EQ(est.step(in, &msg), EstimatorStatus::SingularTorsion);
+    EXPECT_NE(msg.find("singular torsion"), std::string::npos) << msg;
+    EXPECT_FALSE(recoverable(EstimatorStatus::SingularTorsion));
+    EXPECT_EQ(est.samples(), 1);
+    // Negative side too.
+    in.theta_m = -1000.0 * p.N;
+    EXPECT_EQ(est.step(in, &msg), EstimatorStatus::SingularTorsion);
+    // The estimator goes on with good samples.
+    EXPECT_EQ(est.step(static_load(2.0, 0.0, p)), EstimatorStatus::Ok);
+    EXPECT_TRUE(std::isfinite(est.outputs().tau_ukf));
+}
+
+TEST(TorqueEstimator, RecoverableStatuses) {
+    EXPECT_TRUE(recoverable(EstimatorStatus::Ok));
+    EXPECT_TRUE(recoverable(EstimatorStatus::CovarianceRepaired));
+    EXPECT_TRUE(recoverable(EstimatorStatus::CovarianceReset));
+    EXPECT_TRUE(recoverable(EstimatorStatus::UpdateSkipped));
+}
+
+TEST(TorqueEstimator, StaticLoadConverges) {
+    for (double T : {3.0, -5.0, 0.4, 0.0}) {
+        Parameters p;
+        p.a0 = 1e-4;
+        TorqueEstimator est(p);
+        const EstimatorInputs in = static_load(T, 12.3, p);
+        std::vector<double> std_history;
+        for (int k = 0; k < 3000; ++k) {
+            ASSERT_EQ(est.step(in), EstimatorStatus::Ok) << k;
+            std_history.push_back(est.outputs().tau_ukf_std);
+        }
+        const EstimatorOutputs& o = est.outputs();
+        EXPECT_NEAR(o.tau_compliance, T, 1e-9 * (1.0 + std::fabs(T))) << T;
+        EXPECT_NEAR(o.dtheta_f, flexspline_torsion(T, p), 1e-15) << T;
+        EXPECT_NEAR(o.tau_ukf, T, 2e-5 * (1.0 + std::fabs(T))) << T;  // UKF bias of the atan law ~1e-5
+        EXPECT_NEAR(o.omega_m, 0.0, 1e-4) << T;
+        // The torque's uncertainty settles well below its initial 1 N.m.
+        EXPECT_GT(o.tau_ukf_std, 0.0);
+        EXPECT_LT(o.tau_ukf_std, 0.2 * p.ukf_p0_tau);
+        EXPECT_NEAR(std_history.back(), std_history[2000], 1e-6);  // steady state
+        EXPECT_TRUE(std::isfinite(o.nis));
+    }
+}
+
+TEST(TorqueEstimator, StaticLoadConvergesFromAWrongStart) {
+    // The first sample seeds the state with the compliance torque; a step in
+    // load afterwards must be followed.
+    Parameters p;
+    TorqueEstimator est(p);
+    for (int k = 0; k < 200; ++k) ASSERT_EQ(est.step(static_load(0.0, 1.0, p)), EstimatorStatus::Ok);
+    EXPECT_NEAR(est.outputs().tau_ukf, 0.0, 1e-3);
+    for (int k = 0; k < 3000; ++k) ASSERT_TRUE(recoverable(est.step(static_load(4.0, 1.0, p))));
+    EXPECT_NEAR(est.outputs().tau_ukf, 4.0, 1e-3);
+}
+
+TEST(TorqueEstimator, ConstantSpeedWithFrictionConverges) {
+    // Constant motor speed w against a joint torque T: Kt*i = Fc*tanh(w/omega_fc) + Bm*w + T/N.
+    Parameters p;
+    const double w = 20.0, T = 2.5;
+    const double i_m = (coulomb_friction(w, p) + p.Bm * w + T / p.N) / p.Kt;
+    TorqueEstimator est(p);
+    for (int k = 0; k < 4000; ++k) {
+        EstimatorInputs in;
+        in.i_m = i_m;
+        in.theta_m = 0.3 + w * k * p.Ts;
+        in.theta_l = consistent_theta_l(T, i_m, in.theta_m, p);
+        ASSERT_TRUE(recoverable(est.step(in))) << k;
+    }
+    EXPECT_NEAR(est.outputs().omega_m, w, 1e-3 * w);
+    EXPECT_NEAR(est.outputs().tau_ukf, T, 2e-3 * T);
+    EXPECT_NEAR(est.outputs().tau_compliance, T, 1e-8);
+}
+
+std::vector<EstimatorInputs> varying_inputs(const Parameters& p, int n, int offset) {
+    std::vector<EstimatorInputs> v;
+    for (int k = offset; k < offset + n; ++k) {
+        const double t = k * p.Ts;
+        const double T = 3.0 * std::sin(2.0 * t) + 0.5 * std::sin(37.0 * t);
+        EstimatorInputs in;
+        in.i_m = T / p.N / p.Kt + 0.01 * std::cos(91.0 * t);
+        in.theta_m = 5.0 * std::sin(1.3 * t);
+        in.theta_l = consistent_theta_l(T, in.i_m, in.theta_m, p) + 1e-6 * std::sin(713.0 * t);
+        v.push_back(in);
+    }
+    return v;
+}
+
+void expect_same_outputs(const EstimatorOutputs& a, const EstimatorOutputs& b, int k) {
+    EXPECT_EQ(a.tau_ukf, b.tau_ukf) << k;
+    EXPECT_EQ(a.tau_compliance, b.tau_compliance) << k;
+    EXPECT_EQ(a.omega_m, b.omega_m) << k;
+    EXPECT_EQ(a.dtheta_f, b.dtheta_f) << k;
+    EXPECT_EQ(a.tau_ukf_std, b.tau_ukf_std) << k;
+    EXPECT_EQ(a.nis, b.nis) << k;
+}
+
+TEST(TorqueEstimator, SaveLoadStateContinuesBitIdentically) {
+    const Parameters p;
+    const auto first = varying_inputs(p, 300, 0);
+    const auto next = varying_inputs(p, 100, 300);
+
+    TorqueEstimator a(p);
+    for (const auto& in : first) ASSERT_TRUE(recoverable(a.step(in)));
+    const std::vector<double> saved = a.save_state();
+
+    TorqueEstimator b(p);
+    b.step(next[50]);  // b has a history of its own that the load must overwrite
+    ASSERT_TRUE(b.load_state(saved));
+    EXPECT_EQ(b.samples(), a.samples());
+    expect_same_outputs(a.outputs(), b.outputs(), -1);
+    EXPECT_EQ(b.save_state(), saved);
+
+    for (std::size_t k = 0; k < next.size(); ++k) {
+        const EstimatorStatus sa = a.step(next[k]);
+        const EstimatorStatus sb = b.step(next[k]);
+        ASSERT_EQ(sa, sb) << k;
+        expect_same_outputs(a.outputs(), b.outputs(), static_cast<int>(k));
+    }
+    EXPECT_EQ(a.save_state(), b.save_state());
+    // The continuation actually moved (not a trivially frozen filter).
+    EXPECT_NE(a.save_state(), saved);
+}
+
+TEST(TorqueEstimator, SaveLoadOfAFreshEstimator) {
+    // Restoring a never-stepped state must give the same first sample as a fresh one.
+    const Parameters p;
+    TorqueEstimator fresh(p), used(p);
+    const std::vector<double> empty = fresh.save_state();
+    for (const auto& in : varying_inputs(p, 20, 0)) used.step(in);
+    ASSERT_TRUE(used.load_state(empty));
+    const auto in = varying_inputs(p, 1, 500)[0];
+    fresh.step(in);
+    used.step(in);
+    expect_same_outputs(fresh.outputs(), used.outputs(), 0);
+}
+
+TEST(TorqueEstimator, LoadStateRejectsMalformedData) {
+    const Parameters p;
+    TorqueEstimator a(p);
+    for (const auto& in : varying_inputs(p, 10, 0)) a.step(in);
+    std::vector<double> s = a.save_state();
+    TorqueEstimator b(p);
+    const std::vector<double> b_before = b.save_state();
+    std::vector<double> shorter(s.begin(), s.end() - 1);
+    EXPECT_FALSE(b.load_state(shorter));
+    EXPECT_FALSE(b.load_state({}));
+    std::vector<double> longer = s;
+    longer.push_back(0.0);
+    EXPECT_FALSE(b.load_state(longer));
+    std::vector<double> wrong_version = s;
+    wrong_version[0] += 1.0;
+    EXPECT_FALSE(b.load_state(wrong_version));
+    EXPECT_EQ(b.save_state(), b_before);  // untouched by rejected loads
+}
+
+}  // namespace
+}  // namespace hdjoint
