@@ -27,6 +27,8 @@ std::optional<std::size_t> find_parameter(const std::string& name) {
     return std::nullopt;
 }
 
+long delay_samples(const Parameters& p) { return std::lround(p.i_delay / p.Ts); }
+
 bool in_estimator(Scope s) { return s == Scope::Shared || s == Scope::Estimator; }
 bool in_plant(Scope s) { return s == Scope::Shared || s == Scope::Plant; }
 
@@ -42,6 +44,13 @@ std::optional<std::string> validate(const Parameters& p, bool estimator, bool pl
                 << info.min << ", " << info.max << "] " << info.unit;
             return msg.str();
         }
+    }
+    if (estimator && delay_samples(p) > kMaxDelaySamples) {
+        std::ostringstream msg;
+        msg.precision(17);
+        msg << "parameter i_delay = " << p.i_delay << " s is " << delay_samples(p) << " samples of Ts = " << p.Ts
+            << " s; the estimator delays the encoders by at most " << kMaxDelaySamples << " samples";
+        return msg.str();
     }
     return std::nullopt;
 }

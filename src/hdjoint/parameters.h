@@ -38,6 +38,11 @@ std::optional<std::size_t> find_parameter(const std::string& name);
 bool in_estimator(Scope s);
 bool in_plant(Scope s);
 
+// The estimator's current-to-encoder delay in whole samples, round(i_delay/Ts);
+// at most kMaxDelaySamples (validate() says so).
+constexpr long kMaxDelaySamples = 128;
+long delay_samples(const Parameters& p);
+
 // First problem with a parameter set (name and value), or nothing when the
 // whole set is valid. `scope_filter` checks only parameters the FMU carries.
 std::optional<std::string> validate(const Parameters& p, bool estimator, bool plant);

@@ -43,11 +43,17 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
             s.precision(17);
             s << "singular torsion: dtheta_f = " << c.dtheta_f << " rad gives |Cf*Kf*dtheta_f| = "
               << std::fabs(p_.Cf * p_.Kf * backlash_deadzone(c.dtheta_f, p_))
-              << " >= pi/2 (theta_m = " << in.theta_m << ", theta_l = " << in.theta_l
+              << " >= pi/2 (theta_m = " << c.theta_m << ", theta_l = " << c.theta_l
               << "); check N, a0 (encoder offsets), Kf and Cf";
             *message = s.str();
         }
         return EstimatorStatus::SingularTorsion;
+    }
+    if (!c.ready) {
+        // The delay line is filling: no angles yet for this current. Show the
+        // compliance model on the first angles; the filter waits.
+        out_ = {c.tau, c.tau, 0.0, c.dtheta_f, p_.ukf_p0_tau, 0.0, 0.0};
+        return EstimatorStatus::Ok;
     }
 
     FilterStatus predicted = FilterStatus::Ok;
@@ -57,7 +63,7 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
         ukf_.covariance() = ukf_.initial_covariance();
     } else {
         predicted = ukf_.predict(system_, previous_u_, Q_);
-        speed = (in.theta_m - previous_theta_m_) / p_.Ts;
+        speed = (c.theta_m - previous_theta_m_) / p_.Ts;
     }
     Vector<2> z;
     z << speed, c.torsion;
@@ -71,10 +77,10 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
     out_.dtheta_f = c.dtheta_f;
     out_.nis = update.nis;
     out_.hysteresis_torque = c.z;
-    previous_theta_m_ = in.theta_m;
+    previous_theta_m_ = c.theta_m;
     // eq. (2)'s input, with cogging, Stribeck friction and the drift when they are on.
     const double t = static_cast<double>(samples_) * p_.Ts;
-    previous_u_ = motor_torque(in.i_m, in.theta_m, p_) - coulomb_friction(x(0), p_, friction_drift_scale(t, p_));
+    previous_u_ = motor_torque(in.i_m, c.theta_m, p_) - coulomb_friction(x(0), p_, friction_drift_scale(t, p_));
     ++samples_;
 
     // Report the worst thing the filter had to do on this sample.

@@ -47,7 +47,9 @@ public:
     explicit TorqueEstimator(const Parameters& p);
 
     // Process one sample (inputs valid at this sample's time). `message`,
-    // when given, names what went wrong for any status but Ok.
+    // when given, names what went wrong for any status but Ok. With i_delay
+    // the current is matched with the angles of round(i_delay/Ts) samples
+    // before, and the first that many samples only fill the delay line.
     EstimatorStatus step(const EstimatorInputs& in, std::string* message = nullptr);
 
     const EstimatorOutputs& outputs() const { return out_; }
