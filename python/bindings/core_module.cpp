@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "hdjoint/compliance_model.h"
+#include "hdjoint/hysteresis.h"
 #include "hdjoint/joint_plant.h"
 #include "hdjoint/parameters.h"
 #include "hdjoint/torque_estimator.h"
@@ -60,7 +62,7 @@ std::map<std::string, OutArray> run_estimator(const std::map<std::string, double
     check_lengths(n, {i_m.shape(0), theta_m.shape(0), theta_l.shape(0)});
     const Parameters p = parameters_from(values, true, false);
     TorqueEstimator estimator(p);
-    std::vector<double> tau_ukf(n), tau_c(n), omega(n), dtheta_f(n), std_ukf(n), nis(n), status(n);
+    std::vector<double> tau_ukf(n), tau_c(n), omega(n), dtheta_f(n), std_ukf(n), nis(n), status(n), z(n);
     const double t0 = time(0), tolerance = 1e-6 * p.Ts;
     long next = 0;
     {
@@ -87,6 +89,7 @@ std::map<std::string, OutArray> run_estimator(const std::map<std::string, double
             dtheta_f[j] = o.dtheta_f;
             std_ukf[j] = o.tau_ukf_std;
             nis[j] = o.nis;
+            z[j] = o.hysteresis_torque;
             status[j] = worst;
         }
     }
@@ -98,25 +101,42 @@ std::map<std::string, OutArray> run_estimator(const std::map<std::string, double
     out.emplace("tau_ukf_std", make_array(std::move(std_ukf)));
     out.emplace("nis", make_array(std::move(nis)));
     out.emplace("status", make_array(std::move(status)));
+    out.emplace("hysteresis_torque", make_array(std::move(z)));
     return out;
 }
 
-// The compliance model, eq. (3)-(8), vectorised; NaN where the torsion is singular.
+// The estimator's compliance model, eq. (3)-(8) with the beyond-paper terms,
+// run sample by sample (hysteresis and the current delay carry state; one
+// row is one estimator sample). NaN where the torsion is singular.
 std::map<std::string, OutArray> compliance(const std::map<std::string, double>& values, Array i_m, Array theta_m,
                                            Array theta_l) {
     const std::size_t n = i_m.shape(0);
     check_lengths(n, {theta_m.shape(0), theta_l.shape(0)});
     const Parameters p = parameters_from(values, true, false);
-    std::vector<double> tau(n), dtheta_f(n);
+    ComplianceModel model(p);
+    std::vector<double> tau(n), dtheta_f(n), z(n);
     for (std::size_t j = 0; j < n; ++j) {
-        const ComplianceEstimate c = compliance_estimate(i_m(j), theta_m(j), theta_l(j), p);
+        const ComplianceSample c = model.step(i_m(j), theta_m(j), theta_l(j));
         tau[j] = c.valid ? c.tau : std::nan("");
         dtheta_f[j] = c.dtheta_f;
+        z[j] = c.z;
     }
     std::map<std::string, OutArray> out;
     out.emplace("tau_compliance", make_array(std::move(tau)));
     out.emplace("dtheta_f", make_array(std::move(dtheta_f)));
+    out.emplace("hysteresis_torque", make_array(std::move(z)));
     return out;
+}
+
+// The Dahl hysteresis torque over a torsion sequence x, from z = 0 at x[0],
+// by the model's exact update (for hysteresis regressors).
+OutArray dahl(Array x, double H, double sigma) {
+    if (!(H >= 0.0) || !std::isfinite(H)) throw std::invalid_argument("dahl: H must be finite and >= 0");
+    if (!(sigma > 0.0) || !std::isfinite(sigma)) throw std::invalid_argument("dahl: sigma must be finite and > 0");
+    const std::size_t n = x.shape(0);
+    std::vector<double> z(n, 0.0);
+    for (std::size_t j = 1; j < n; ++j) z[j] = dahl_update(z[j - 1], x(j) - x(j - 1), H, sigma);
+    return make_array(std::move(z));
 }
 
 // The joint, open loop: inputs held over [t_j, t_j+1); outputs at every t_j
@@ -130,6 +150,7 @@ std::map<std::string, OutArray> simulate_joint(const std::map<std::string, doubl
     std::string message;
     if (!plant.initialize(tau_ext(0), &message)) throw std::runtime_error(message);
     std::vector<double> theta_m(n), theta_l(n), tau(n), omega_m(n), omega_l(n);
+    std::vector<double> friction(n), cogging(n), link_friction(n), z_hys(n), elastic(n), scale(n);
     {
         nb::gil_scoped_release release;
         for (std::size_t j = 0; j < n; ++j) {
@@ -143,6 +164,13 @@ std::map<std::string, OutArray> simulate_joint(const std::map<std::string, doubl
             tau[j] = o.tau_joint;
             omega_m[j] = o.omega_m;
             omega_l[j] = o.omega_l;
+            const PlantInternals r = plant.internals();
+            friction[j] = r.tau_friction;
+            cogging[j] = r.tau_cogging;
+            link_friction[j] = r.tau_link_friction;
+            z_hys[j] = r.z_dahl + r.z_bouc_wen;
+            elastic[j] = r.elastic_torsion;
+            scale[j] = r.friction_scale;
         }
     }
     std::map<std::string, OutArray> out;
@@ -151,6 +179,12 @@ std::map<std::string, OutArray> simulate_joint(const std::map<std::string, doubl
     out.emplace("tau_joint", make_array(std::move(tau)));
     out.emplace("omega_m", make_array(std::move(omega_m)));
     out.emplace("omega_link", make_array(std::move(omega_l)));
+    out.emplace("tau_friction", make_array(std::move(friction)));
+    out.emplace("tau_cogging", make_array(std::move(cogging)));
+    out.emplace("tau_link_friction", make_array(std::move(link_friction)));
+    out.emplace("z_hysteresis", make_array(std::move(z_hys)));
+    out.emplace("elastic_torsion", make_array(std::move(elastic)));
+    out.emplace("friction_scale", make_array(std::move(scale)));
     return out;
 }
 
@@ -201,9 +235,14 @@ NB_MODULE(_core, m) {
     m.def("run_estimator", &run_estimator, nb::arg("params"), nb::arg("time"), nb::arg("i_m"), nb::arg("theta_m"),
           nb::arg("theta_l"), "Compliance model and paper UKF over a recording, with the FMU's sampling.");
     m.def("compliance", &compliance, nb::arg("params"), nb::arg("i_m"), nb::arg("theta_m"), nb::arg("theta_l"),
-          "The compliance model, eq. (3)-(8), per sample.");
+          "The estimator's compliance model, eq. (3)-(8) with hysteresis, backlash and the current delay, sample by "
+          "sample: tau_compliance, dtheta_f, hysteresis_torque.");
+    m.def("dahl", &dahl, nb::arg("x"), nb::arg("H"), nb::arg("sigma"),
+          "Dahl hysteresis torque over a torsion sequence x (z = 0 at x[0]), the model's exact update.");
     m.def("time_estimator", &time_estimator, nb::arg("params"), nb::arg("samples"),
           "Seconds for `samples` estimator steps timed inside C++ (benchmark).");
     m.def("simulate_joint", &simulate_joint, nb::arg("params"), nb::arg("time"), nb::arg("i_m"), nb::arg("tau_ext"),
-          "The joint, open loop, with inputs held between rows.");
+          "The joint, open loop, with inputs held between rows; besides the FMU's outputs, tau_friction (motor side, "
+          "viscous included), tau_cogging, tau_link_friction, z_hysteresis (Dahl + Bouc-Wen torque), "
+          "elastic_torsion and friction_scale.");
 }
