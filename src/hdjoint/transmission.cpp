@@ -20,7 +20,6 @@ struct Harmonic {
 };
 struct Harmonics {
     Harmonic h[2];
-    bool on() const { return h[0].on() || h[1].on(); }
     // The sum (derivative 0), or its first (1) or second (2) derivative by the angle.
     double operator()(double angle, int derivative) const {
         double sum = 0.0;
@@ -34,6 +33,13 @@ struct Harmonics {
         return sum;
     }
 };
+// Cheap tests first: the default model never builds the tables.
+bool motor_harmonics_on(const Parameters& p) {
+    return p.ke_m1_a != 0.0 || p.ke_m1_b != 0.0 || p.ke_m2_a != 0.0 || p.ke_m2_b != 0.0;
+}
+bool link_harmonics_on(const Parameters& p) {
+    return p.ke_l1_a != 0.0 || p.ke_l1_b != 0.0 || p.ke_l2_a != 0.0 || p.ke_l2_b != 0.0;
+}
 Harmonics motor_harmonics(const Parameters& p) {
     return {{{p.ke_m1_order, p.ke_m1_a, p.ke_m1_b}, {p.ke_m2_order, p.ke_m2_a, p.ke_m2_b}}};
 }
@@ -51,9 +57,8 @@ double kinematic_error(double theta_m, double theta_l, const Parameters& p) {
     const double w = p.omega_w * theta_m;
     double e = p.a0 + p.al1 * std::cos(l) + p.bl1 * std::sin(l) + p.aw1 * std::cos(w) +
                p.bw1 * std::sin(w) + p.aw2 * std::cos(2.0 * w) + p.bw2 * std::sin(2.0 * w);
-    const Harmonics hm = motor_harmonics(p), hl = link_harmonics(p);
-    if (hm.on()) e += hm(theta_m, 0);
-    if (hl.on()) e += hl(theta_l, 0);
+    if (motor_harmonics_on(p)) e += motor_harmonics(p)(theta_m, 0);
+    if (link_harmonics_on(p)) e += link_harmonics(p)(theta_l, 0);
     return e;
 }
 
@@ -64,9 +69,8 @@ void kinematic_error_gradient(double theta_m, double theta_l, const Parameters& 
     *d_theta_l = p.omega_l * (-p.al1 * std::sin(l) + p.bl1 * std::cos(l));
     *d_theta_m = p.omega_w * (-p.aw1 * std::sin(w) + p.bw1 * std::cos(w) +
                               2.0 * (-p.aw2 * std::sin(2.0 * w) + p.bw2 * std::cos(2.0 * w)));
-    const Harmonics hm = motor_harmonics(p), hl = link_harmonics(p);
-    if (hm.on()) *d_theta_m += hm(theta_m, 1);
-    if (hl.on()) *d_theta_l += hl(theta_l, 1);
+    if (motor_harmonics_on(p)) *d_theta_m += motor_harmonics(p)(theta_m, 1);
+    if (link_harmonics_on(p)) *d_theta_l += link_harmonics(p)(theta_l, 1);
 }
 
 void kinematic_error_curvature(double theta_m, double theta_l, const Parameters& p, double* dd_theta_m,
