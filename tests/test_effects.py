@@ -24,7 +24,7 @@ NEW = {
     "hys_H": ("shared", 0.0), "hys_sigma": ("shared", 2e4), "backlash": ("shared", 0.0),
     "Fs": ("shared", 0.0), "omega_s": ("shared", 20.0), "Fc_drift": ("shared", 0.0),
     "cog_order": ("shared", 6.0), "cog_a": ("shared", 0.0), "cog_b": ("shared", 0.0),
-    "i_delay": ("estimator", 0.0), "Fl": ("plant", 0.0),
+    "i_delay": ("estimator", 0.0), "wg_load": ("estimator", 0.0), "Fl": ("plant", 0.0),
     "lugre_sigma0": ("plant", 0.0), "lugre_sigma1": ("plant", 0.0),
     "bw_A": ("plant", 0.0), "bw_beta": ("plant", 0.0), "bw_gamma": ("plant", 0.0),
     "thermal_gain": ("plant", 0.0), "thermal_tc": ("plant", 20.0),

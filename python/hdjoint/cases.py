@@ -40,6 +40,8 @@ CASES = [
          truth={"ke_m1_order": 3.0, "ke_m1_a": 6e-6, "ke_m1_b": -4e-6, "ke_m2_order": 5.0, "ke_m2_a": 4e-6}),
     Case("wave generator compliance", ("wave_generator_compliance",),
          truth={"Kw": 40.0, "Cw": 10.0}, nominal_off={"Kw": 1e9, "Cw": 0.0}),
+    Case("wave generator load (the paper's approximation)", ("wave_generator_load",),
+         nominal_off={"wg_load": 0.0}),
     Case("stiffness nonlinearity", ("stiffness_nonlinearity",), truth={"Cf": 0.0645}, nominal_off={"Cf": 0.0}),
     # Bouc-Wen with gamma != 0 (with gamma = 0 and n = 1 it would be Dahl
     # itself): saturation A/(beta+gamma) = 0.1 N.m, unequal branch slopes.
@@ -63,8 +65,11 @@ CASES = [
 
 
 def nominal_for(case: Case) -> dict[str, float]:
-    """What the user believes: defaults, with the case's effect switched off."""
-    return dict(parameters.defaults(), **case.nominal_off)
+    """What the user believes: defaults with the wave generator loaded as in
+    the joint FMU (wg_load = 1), and the case's effect switched off."""
+    nominal = dict(parameters.defaults(), wg_load=1.0)
+    nominal.update(case.nominal_off)
+    return nominal
 
 
 def truth_for(case: Case) -> dict[str, float]:

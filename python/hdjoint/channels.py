@@ -48,15 +48,8 @@ class Prepared:
 SMOOTHED_PARTS = ("motor", "link")
 
 
-_NOT_YET_IN_TABLE = {"i_delay": 0.0, "Fs": 0.0, "omega_s": 20.0, "Fc_drift": 0.0, "cog_order": 6.0, "cog_a": 0.0,
-                     "cog_b": 0.0, "Fl": 0.0}  # TEMPORARY until the C++ effect terms land
-
-
 def _get(p: dict, name: str) -> float:
-    if name in p:
-        return p[name]
-    info = parameters.table().get(name)
-    return info.default if info else _NOT_YET_IN_TABLE[name]
+    return p[name] if name in p else parameters.table()[name].default
 
 
 def tau_transmission(prep: Prepared, p: dict[str, float]) -> np.ndarray:

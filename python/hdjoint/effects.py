@@ -43,6 +43,12 @@ EFFECTS: dict[str, Effect] = {e.id: e for e in [
            lambda p: p.get("Kw", 1e9) < 1e8, starts=({"Kw": 3.0, "Cw": 0.0}, {"Kw": 10.0, "Cw": 10.0},
                                                     {"Kw": 30.0, "Cw": 30.0}),
            needs="torque", lookalikes=("stiffness_nonlinearity", "backlash")),
+    Effect("wave_generator_load", "transmission", ("wg_load",),
+           "the wave generator is loaded by the transmitted torque tau/N, not by the motor current Kt*i_m "
+           "(the paper's approximation carries friction and inertia into the wave generator's torsion)",
+           "wave generator torque (1 - wg_load)*Kt*i_m + wg_load*tau/N",
+           _nonzero("wg_load"), starts=({"wg_load": 1.0}, {"wg_load": 0.5}), needs="speed_reversals",
+           lookalikes=("coulomb_friction", "wave_generator_compliance")),
     Effect("stiffness_nonlinearity", "transmission", ("Cf",),
            "flexspline stiffening with torque (the catalogue's K1 -> K3)", "atan law of eq. (5) with Cf",
            _nonzero("Cf"), starts=({"Cf": 0.03}, {"Cf": 0.08}, {"Cf": 0.2}), needs="torque",

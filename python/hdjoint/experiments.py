@@ -33,7 +33,11 @@ TRUE_JOINT_DEVIATIONS = {
     "aw2": 0.80,
     "bw2": 1.50,
 }
-TRUE_JOINT_EXTRA = {"Df": 3.0}  # structural damping of the flexspline
+# The joint FMU's wave generator carries the transmitted torque tau/N; the
+# estimator's default is the paper's tau_w = Kt*i_m. (Flexspline damping Df
+# is left out: the plant applies it to the total torsion rate, including the
+# kinematic error's, which is not deformation.)
+TRUE_JOINT_EXTRA: dict[str, float] = {}
 
 
 def true_joint_parameters(nominal: dict[str, float] | None = None) -> dict[str, float]:

@@ -113,10 +113,36 @@ bool flexspline_torque(double dtheta_f, const Parameters& p, double* tau_f) {
 
 ComplianceEstimate compliance_estimate(double i_m, double theta_m, double theta_l, const Parameters& p) {
     ComplianceEstimate e;
+    if (p.wg_load > 0.0) return loaded_wave_generator_estimate(i_m, theta_m, theta_l, p);
     e.dtheta_f = total_torsion(theta_m, theta_l, p) - wave_generator_torsion(p.Kt * i_m, p) -
                  kinematic_error(theta_m, theta_l, p);
     e.valid = flexspline_torque(backlash_deadzone(e.dtheta_f, p), p, &e.tau);
     return e;
+}
+
+// With wg_load = w > 0 the wave generator carries (1-w)*Kt*i_m + w*tau/N, so
+// the torque solves tau = eq8(deadzone(y - wg((1-w)*Kt*i_m + w*tau/N))).
+// The right side changes with tau by w*wg'*eq8'/N, about 0.1 for real
+// joints: a fixed-point iteration converges in a few steps.
+ComplianceEstimate loaded_wave_generator_estimate(double i_m, double theta_m, double theta_l, const Parameters& p) {
+    ComplianceEstimate e;
+    const double y = total_torsion(theta_m, theta_l, p) - kinematic_error(theta_m, theta_l, p);
+    const double motor_part = (1.0 - p.wg_load) * p.Kt * i_m, gain = p.wg_load / p.N;
+    double tau = 0.0;
+    for (int it = 0; it < 200; ++it) {
+        e.dtheta_f = y - wave_generator_torsion(motor_part + gain * tau, p);
+        double next = 0.0;
+        if (!flexspline_torque(backlash_deadzone(e.dtheta_f, p), p, &next)) return e;
+        const bool converged = std::fabs(next - tau) <= 1e-13 * (1.0 + std::fabs(next));
+        tau = next;
+        if (converged) {
+            e.tau = tau;
+            e.dtheta_f = y - wave_generator_torsion(motor_part + gain * tau, p);
+            e.valid = std::isfinite(tau);
+            return e;
+        }
+    }
+    return e;  // no convergence: reported as a singular torsion
 }
 
 bool transmitted_torque(double elastic_torsion, const Parameters& p, double* tau) {

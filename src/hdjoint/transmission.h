@@ -63,6 +63,8 @@ struct ComplianceEstimate {
     bool valid = false;     // false: singular torsion, tau is meaningless
 };
 ComplianceEstimate compliance_estimate(double i_m, double theta_m, double theta_l, const Parameters& p);
+// The same with the wave generator loaded by the transmitted torque (wg_load > 0).
+ComplianceEstimate loaded_wave_generator_estimate(double i_m, double theta_m, double theta_l, const Parameters& p);
 
 // The plant's transmitted torque: solves
 //   dtheta - theta_err - b/2*sign(tau) = flexspline_torsion(tau) + wave_generator_torsion(tau/N)
