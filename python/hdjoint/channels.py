@@ -52,10 +52,17 @@ def _get(p: dict, name: str) -> float:
     return p[name] if name in p else parameters.table()[name].default
 
 
-def tau_transmission(prep: Prepared, p: dict[str, float]) -> np.ndarray:
-    """tau_T: the compliance model over the recording (NaN where the torsion is singular)."""
+def tau_transmission(prep: Prepared, p: dict[str, float], index: np.ndarray | None = None) -> np.ndarray:
+    """tau_T: the compliance model over the recording (NaN where the torsion is singular).
+
+    With `index`, only those samples (and only when the model is stateless
+    there: no hysteresis, no delay; otherwise the whole run, then indexed)."""
     rec = prep.rec
-    return _core.compliance(parameters.for_estimator(p), rec.i_m, rec.theta_m, rec.theta_l)["tau_compliance"]
+    if index is not None and (_get(p, "hys_H") > 0.0 or _get(p, "i_delay") > 0.0):
+        return tau_transmission(prep, p)[index]
+    pick = (lambda x: x) if index is None else (lambda x: x[index])
+    return _core.compliance(parameters.for_estimator(p), pick(rec.i_m), pick(rec.theta_m),
+                            pick(rec.theta_l))["tau_compliance"]
 
 
 def motor_friction(p: dict, omega: np.ndarray, t_rel: np.ndarray) -> np.ndarray:

@@ -22,20 +22,20 @@ def _say(message: str) -> None:
 def run_demo(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
-    _say(f"[1/4] FMUs -> {out / 'fmus'}")
+    _say(f"[1/5] FMUs -> {out / 'fmus'}")
     export_fmus(out / "fmus")
 
-    _say("[2/4] simulating the paper experiment (HarmonicDriveJoint.fmu under position control, 58 s)")
+    _say("[2/5] simulating the paper experiment (HarmonicDriveJoint.fmu under position control, 58 s)")
     rec = experiments.run("paper")
     write_recording(out / "paper_recording.csv", rec)
 
-    _say("[3/4] estimating torque through JointTorqueEstimator.fmu (fmpy)")
+    _say("[3/5] estimating torque through JointTorqueEstimator.fmu (fmpy)")
     est_params = parameters.for_estimator(parameters.defaults())
     est = run_estimator_fmu(rec.time, rec.i_m, rec.theta_m, rec.theta_l, est_params)
     write_csv(out / "paper_estimates.csv", {"time": rec.time, **est})
     fmu_check = error_figures(est["tau_ukf"], rec.extra["tau_joint"])
 
-    _say("[4/4] the paper's table: compliance model vs UKF (default and fairly tuned)")
+    _say("[4/5] the paper's table: compliance model vs UKF (default and fairly tuned)")
     table = reproduce(rec)
     (out / "paper_table.md").write_text(table.markdown() + "\n")
     plots.save(plots.torque_comparison(rec.time, table.estimates, "Paper experiment: estimates vs true torque"),
@@ -43,4 +43,10 @@ def run_demo(out: Path) -> None:
     print(table.markdown())
     print(f"\nUKF through the FMU: RMS {fmu_check.rms:.3f} N.m (same as the batch path's default row)")
     print(f"tuned UKF settings: {table.tuned_settings}")
+
+    _say("[5/5] diagnosing the recording against the nominal model (report: diagnosis/report.html)")
+    from .cli import main as cli_main
+    parameters.save(out / "nominal_params.json", parameters.defaults())
+    cli_main(["diagnose", str(out / "paper_recording.csv"), "--params", str(out / "nominal_params.json"),
+              "--out", str(out / "diagnosis")])
     print(f"outputs in {out} ({time.perf_counter() - started:.1f} s)")

@@ -35,7 +35,7 @@ from .structure import HeldOutGain, Order, held_out_gain_sq, order_search, scan
 
 MIN_SAMPLES = 500
 MIN_DURATION = 2.0
-FIT_SAMPLES = 12000
+FIT_SAMPLES = 5000  # training samples a fit looks at (spread over all training blocks)
 FOLDS = 40  # contiguous blocks; even ones fit, odd ones are held out  # training samples a fit looks at (spread over all training folds)
 
 
@@ -98,6 +98,20 @@ class Evaluator:
         value = ESTIMATES[part](self.prep, p)
         self._cache[part] = (key, value)
         return value
+
+    def residual_at(self, channel: Channel, p: dict, index: np.ndarray) -> np.ndarray:
+        """The residual at `index` only: fits look at a sample of the training
+        blocks, and the transmission model (the costly one) need not run elsewhere."""
+        if channel.part != "transmission":
+            return self.residual(channel, p)[index]
+        key = tuple(p.get(n, 0.0) for n in self.part_params["transmission"])
+        hit = self._cache.get("transmission@index")
+        if hit is None or hit[0] != key:
+            hit = (key, ESTIMATES["transmission"](self.prep, p, index))
+            self._cache["transmission@index"] = hit
+        # The transmission is never a smoothed part, so its reference is taken
+        # as residual() takes it.
+        return self.estimate(channel.reference, p)[index] - hit[1]
 
     def residual(self, channel: Channel, p: dict) -> np.ndarray:
         reference = self.estimate(channel.reference, p)
@@ -171,8 +185,7 @@ class Diagnosis:
     def _normalised(self, p, channels, index=None) -> np.ndarray:
         out = []
         for c in channels:
-            r = self.eval.residual(c, p)
-            r = r if index is None else r[index]
+            r = self.eval.residual(c, p) if index is None else self.eval.residual_at(c, p, index)
             out.append(np.where(np.isfinite(r), r / self.sigma[c.name], 1e3))
         return np.concatenate(out)
 

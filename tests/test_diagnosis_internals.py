@@ -1,0 +1,28 @@
+"""Pieces of the diagnosis that must agree with each other exactly."""
+import numpy as np
+import pytest
+
+from hdjoint.cases import CASES, nominal_for, record
+from hdjoint.diagnosis import Diagnosis
+
+
+@pytest.fixture(scope="module")
+def diag():
+    case = CASES[0]
+    return Diagnosis(record(case, duration=4.0), nominal_for(case))
+
+
+@pytest.mark.parametrize("extra", [{}, {"hys_H": 0.2, "hys_sigma": 2e4}, {"i_delay": 2e-3}])
+def test_residual_on_the_fit_sample_equals_the_full_residual_there(diag, extra):
+    p = dict(diag.nominal, **extra)
+    for channel in diag.channels:
+        full = diag.eval.residual(channel, p)[diag.fit_index]
+        sampled = diag.eval.residual_at(channel, p, diag.fit_index)
+        np.testing.assert_array_equal(sampled, full)
+
+
+def test_blocks_alternate_and_cover_the_run(diag):
+    assert diag.train.any() and diag.test.any()
+    # Every fifth of the run has both fitting and held-out samples.
+    for part in np.array_split(np.arange(len(diag.rec)), 5):
+        assert diag.train[part].any() and diag.test[part].any()
