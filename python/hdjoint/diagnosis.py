@@ -150,6 +150,7 @@ class Finding:
     runner_up: tuple[str, float] | None
     orders: list[Order] = field(default_factory=list)
     confidence: float = 0.0
+    worst_channel_ratio: float = 1.0  # largest held-out MSE after/before over the effect's channels
 
 
 class Diagnosis:
@@ -348,10 +349,14 @@ class Diagnosis:
         fit = self.fit(trial, names_all, channels, set(self._anchors(effect.part)), effect.starts or ({},))
         before, after = self._squared(p, channels), self._squared(fit.params, channels)
         gain = held_out_gain_sq(before, after, self.fold, self.test)
+        # Held-out change of each channel on its own: a real effect does not
+        # make another view of the same joint worse.
+        worst = max(float(np.nanmean(self._squared(fit.params, [c])[self.test]) /
+                          max(np.nanmean(self._squared(p, [c])[self.test]), 1e-300)) for c in channels)
         n_eff = self._n_eff(p)
         mse_b, mse_a = np.mean(before[self.train]), np.mean(after[self.train])
         dbic = n_eff * math.log(max(mse_a, 1e-300) / max(mse_b, 1e-300)) + len(names) * math.log(n_eff)
-        return Finding(effect, p, fit.params, names, gain, float(dbic), None, orders)
+        return Finding(effect, p, fit.params, names, gain, float(dbic), None, orders, worst_channel_ratio=worst)
 
     def select(self, p: dict) -> dict:
         candidates = []
@@ -395,7 +400,8 @@ class Diagnosis:
 
 def _accept(f: Finding) -> bool:
     folds_better = np.mean(f.gain.fold_gains > 0)
-    return f.gain.gain > 0.003 and f.gain.z > 3.0 and f.delta_bic < -10.0 and folds_better >= 0.7
+    return (f.gain.gain > 0.003 and f.gain.z > 3.0 and f.delta_bic < -10.0 and folds_better >= 0.7
+            and f.worst_channel_ratio <= 1.0)
 
 
 def _confidence(best: Finding, others: list[Finding]) -> float:

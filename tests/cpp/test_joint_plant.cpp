@@ -505,10 +505,10 @@ TEST(JointPlant, AdvanceReportsASingularTorsion) {
     EXPECT_TRUE(std::isnan(j.outputs().tau_joint));
 }
 
-// BUG (src/hdjoint/transmission.cpp, transmitted_torque): a NaN torsion is
-// taken for zero torsion, so joint_torque() of a state with a NaN angle
-// reports success with tau = 0 and outputs() shows tau_joint = 0 instead of
-// NaN. joint_torque() is documented to return false outside the model's domain.
+// Regression (fixed in 7135e36): transmitted_torque() took a NaN torsion for
+// zero torsion, so joint_torque() of a state with a NaN angle reported success
+// with tau = 0 and outputs() showed tau_joint = 0 instead of NaN.
+// joint_torque() is documented to return false outside the model's domain.
 TEST(JointPlant, JointTorqueRejectsANonFiniteAngle) {
     const Parameters p;
     JointPlant j(p);

@@ -276,10 +276,10 @@ TEST(Transmission, TransmittedTorqueFailsBeyondAnyTorque) {
     EXPECT_NEAR(chain_torsion(tau, p), y, 1e-12 * y);
 }
 
-// BUG (src/hdjoint/transmission.cpp, transmitted_torque): a NaN torsion falls
-// through both `y > 0` and `y < 0` into the `y == 0` branch and is reported as
-// a valid zero torque, although the function's contract is to return false
-// outside the model's domain. JointPlant::joint_torque/outputs() inherit it.
+// Regression (fixed in 7135e36): a NaN torsion fell through both `y > 0` and
+// `y < 0` into the `y == 0` branch and was reported as a valid zero torque,
+// although the function's contract is to return false outside the model's
+// domain (JointPlant::joint_torque/outputs() inherited it).
 TEST(Transmission, TransmittedTorqueRejectsNaNTorsion) {
     Parameters p;
     double tau = 123.0;

@@ -211,11 +211,10 @@ TEST(Ukf, CovarianceStaysSymmetricOnANonlinearModel) {
 
 // ---- symmetrize and robust_cholesky ------------------------------------------
 
-// BUG (src/hdjoint/linear_algebra.h, symmetrize): `*P = 0.5 * (*P + P->transpose())`
-// aliases: Eigen evaluates it in place, so P(j,i) is computed from the already
-// overwritten P(i,j). [[1,2],[0,1]] becomes [[1,1.5],[1,1]] instead of
-// [[1,1],[1,1]]; the UKF's covariances are therefore not kept symmetric.
-// (Needs e.g. `*P = (0.5 * (*P + P->transpose())).eval();`.)
+// Regression (fixed in 7135e36): `*P = 0.5 * (*P + P->transpose())` aliased:
+// Eigen evaluated it in place, so P(j,i) was computed from the already
+// overwritten P(i,j); [[1,2],[0,1]] became [[1,1.5],[1,1]] instead of
+// [[1,1],[1,1]] and the UKF's covariances were not kept symmetric.
 TEST(LinearAlgebra, SymmetrizeGivesTheSymmetricPart) {
     Matrix<2> P;
     P << 1.0, 2.0, 0.0, 1.0;
