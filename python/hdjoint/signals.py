@@ -1,6 +1,6 @@
 """Derived signals for residual analysis: speeds and accelerations from
 quantised encoders (Savitzky-Golay on a uniform grid, so irregular sampling
-is handled), noise-floor estimates, and contiguous fold labels."""
+is handled), and contiguous fold labels."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -54,25 +54,7 @@ def kinematics(rec: Recording, window_s: float = 0.025) -> Kinematics:
     return Kinematics(f(rec.theta_m, 1), f(rec.theta_m, 2), f(rec.theta_l, 1), f(rec.theta_l, 2), f)
 
 
-def noise_scale(residual: np.ndarray) -> float:
-    """Robust std of the white part of a residual, from first differences
-    (MAD; differences remove slow structure, so this is the noise floor)."""
-    d = np.diff(residual[np.isfinite(residual)])
-    if len(d) < 2:
-        return float("nan")
-    mad = np.median(np.abs(d - np.median(d)))
-    return float(mad / 0.6744897501960817 / np.sqrt(2.0)) or float(np.std(d) / np.sqrt(2.0))
-
-
 def folds(n: int, count: int = 10) -> np.ndarray:
     """Contiguous blocks labelled 0..count-1 in turn: even labels fit, odd
     labels are held out, so both halves cover the whole run and every regime."""
     return (np.arange(n) * count // max(n, 1)).astype(int)
-
-
-def quantisation_torque_std(params: dict[str, float], stiffness: float | None = None) -> float:
-    """Torque noise from encoder quantisation (uniform, both encoders) through the stiffness."""
-    k = stiffness or params["Kf"]
-    res_m = 2 * np.pi / params["motor_counts"] / params["N"] if params.get("motor_counts") else 0.0
-    res_l = 2 * np.pi / params["link_counts"] if params.get("link_counts") else 0.0
-    return float(k * np.sqrt(res_m ** 2 + res_l ** 2) / np.sqrt(12.0))
