@@ -9,6 +9,7 @@
 
 #include "friction.h"
 #include "joint_plant.h"
+#include "paper_equivalence.h"
 #include "parameters.h"
 #include "torque_estimator.h"
 
@@ -231,25 +232,11 @@ TEST(EffectsFriction, LinkFrictionHoldsInsideItsBand) {
 // The switch of each effect off, with its other parameters changed: the
 // model is bit for bit the paper's.
 TEST(EffectsFriction, SwitchedOffIsBitIdentical) {
-    const Parameters paper;
     Parameters p;
     p.omega_s = 3.0;      // Fs = 0
     p.cog_order = 17.0;   // cog_a = cog_b = 0
     p.thermal_tc = 0.5;   // thermal_gain = 0
-    JointPlant a(paper), b(p);
-    ASSERT_TRUE(a.initialize(0.2));
-    ASSERT_TRUE(b.initialize(0.2));
-    TorqueEstimator ea(paper), eb(p);
-    for (int k = 0; k < 400; ++k) {
-        const PlantInputs in{1.5 * std::sin(5e-3 * k), 0.2};
-        ASSERT_TRUE(a.advance(1e-3, in));
-        ASSERT_TRUE(b.advance(1e-3, in));
-        ASSERT_EQ(a.save_state(), b.save_state());
-        const PlantOutputs o = a.outputs();
-        ea.step({in.i_m, o.theta_m, o.theta_l});
-        eb.step({in.i_m, o.theta_m, o.theta_l});
-        ASSERT_EQ(ea.save_state(), eb.save_state());
-    }
+    ASSERT_NO_FATAL_FAILURE(expect_paper_model_bit_for_bit(p, 1.5, 5e-3, 0.2));
 }
 
 }  // namespace

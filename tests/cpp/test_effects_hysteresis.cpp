@@ -11,6 +11,7 @@
 #include "friction.h"
 #include "hysteresis.h"
 #include "joint_plant.h"
+#include "paper_equivalence.h"
 #include "parameters.h"
 #include "torque_estimator.h"
 #include "transmission.h"
@@ -269,26 +270,12 @@ TEST(EffectsHysteresis, LuGreHoldsTheMotorBelowBreakaway) {
 // ---- off means off ---------------------------------------------------------------------
 
 TEST(EffectsHysteresis, SwitchedOffIsBitIdentical) {
-    const Parameters paper;
     Parameters p;
     p.hys_sigma = 7e5;     // hys_H = 0
     p.bw_beta = 3.0;       // bw_A = 0
     p.bw_gamma = 4.0;
     p.lugre_sigma1 = 0.7;  // lugre_sigma0 = 0
-    JointPlant a(paper), b(p);
-    ASSERT_TRUE(a.initialize(-0.4));
-    ASSERT_TRUE(b.initialize(-0.4));
-    TorqueEstimator ea(paper), eb(p);
-    for (int k = 0; k < 400; ++k) {
-        const PlantInputs in{2.0 * std::sin(7e-3 * k), -0.4};
-        ASSERT_TRUE(a.advance(1e-3, in));
-        ASSERT_TRUE(b.advance(1e-3, in));
-        ASSERT_EQ(a.save_state(), b.save_state());
-        const PlantOutputs o = a.outputs();
-        ea.step({in.i_m, o.theta_m, o.theta_l});
-        eb.step({in.i_m, o.theta_m, o.theta_l});
-        ASSERT_EQ(ea.save_state(), eb.save_state());
-    }
+    ASSERT_NO_FATAL_FAILURE(expect_paper_model_bit_for_bit(p, 2.0, 7e-3, -0.4));
 }
 
 }  // namespace
