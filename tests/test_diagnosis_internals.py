@@ -26,3 +26,19 @@ def test_blocks_alternate_and_cover_the_run(diag):
     # Every fifth of the run has both fitting and held-out samples.
     for part in np.array_split(np.arange(len(diag.rec)), 5):
         assert diag.train[part].any() and diag.test[part].any()
+
+
+@pytest.mark.parametrize("part", ["transmission", "motor", "link"])
+def test_estimates_depend_on_no_parameter_outside_their_cache_key(diag, part):
+    """The evaluator reuses an estimate while the parameters in depends_on(part)
+    are unchanged: no other parameter may change it, or the cache goes stale."""
+    from hdjoint import parameters
+    from hdjoint.channels import ESTIMATES, depends_on
+    base = ESTIMATES[part](diag.prep, diag.nominal)
+    for name, info in parameters.table().items():
+        if name in depends_on(part):
+            continue
+        value = diag.nominal.get(name, info.default)
+        moved = value * 1.3 + 1e-3 if info.min <= value * 1.3 + 1e-3 <= info.max else info.min
+        changed = ESTIMATES[part](diag.prep, dict(diag.nominal, **{name: moved}))
+        np.testing.assert_array_equal(changed, base, err_msg=f"{part} estimate depends on {name}")

@@ -13,7 +13,6 @@ from fmpy import simulate_fmu
 
 from hdjoint import parameters
 from hdjoint.fmus import fmu_path
-from hdjoint.recording import read_recording  # noqa: F401  (format shared with recordings)
 
 DATA = Path(__file__).parent / "data"
 TWO_PI = 2 * np.pi

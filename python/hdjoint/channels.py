@@ -102,3 +102,18 @@ def tau_link(prep: Prepared, p: dict[str, float]) -> np.ndarray:
 
 
 ESTIMATES = {"transmission": tau_transmission, "motor": tau_motor, "link": tau_link}
+
+# What each estimate reads, for caching: keep in step with the functions
+# above (tests/test_diagnosis_internals.py fails when a parameter is missing).
+_MOTOR_PARAMETERS = ("N", "Kt", "Jm", "Bm", "Fc", "omega_fc", "Fs", "omega_s", "Fc_drift", "cog_order", "cog_a",
+                     "cog_b", "i_delay")
+_LINK_PARAMETERS = ("N", "Jl", "Bl", "mgl", "Fl", "omega_fc")
+
+
+def depends_on(part: str) -> tuple[str, ...]:
+    """Every parameter the estimate of `part` depends on."""
+    if part == "motor":
+        return _MOTOR_PARAMETERS
+    if part == "link":
+        return _LINK_PARAMETERS
+    return tuple(n for n, info in parameters.table().items() if info.in_estimator())

@@ -27,7 +27,7 @@ from scipy.optimize import least_squares
 from scipy.stats import norm
 
 from . import parameters
-from .channels import ESTIMATES, SMOOTHED_PARTS, Prepared
+from .channels import ESTIMATES, SMOOTHED_PARTS, Prepared, depends_on
 from .effects import EFFECTS, KINEMATIC_EQ7, Effect, calibrated_parameters, testable
 from .recording import Recording
 from .signals import folds as make_folds, kinematics
@@ -86,7 +86,7 @@ class Evaluator:
         self.prep = prep
         self.channels = channels
         self._cache: dict[str, tuple[tuple, np.ndarray]] = {}
-        self.part_params = {part: _part_parameter_names(part) for part in ESTIMATES}
+        self.part_params = {part: depends_on(part) for part in ESTIMATES}
 
     def estimate(self, part: str, p: dict) -> np.ndarray:
         if part == "sensor":
@@ -119,17 +119,6 @@ class Evaluator:
             reference = self.prep.smoothed("tau_sensor", reference) if channel.reference == "sensor" else \
                 self.prep.kin.smooth(np.nan_to_num(reference))
         return reference - self.estimate(channel.part, p)
-
-
-def _part_parameter_names(part: str) -> list[str]:
-    """Every parameter an estimate of `part` depends on (for caching)."""
-    shared_motor = ["N", "Kt", "Jm", "Bm", "Fc", "omega_fc", "Fs", "omega_s", "Fc_drift", "cog_order", "cog_a",
-                    "cog_b", "i_delay"]
-    if part == "motor":
-        return shared_motor
-    if part == "link":
-        return ["N", "Jl", "Bl", "mgl", "Fl", "omega_fc"]
-    return [n for n, info in parameters.table().items() if info.in_estimator()]
 
 
 @dataclass
@@ -347,12 +336,14 @@ class Diagnosis:
             return None
         names_all = names + [a for a in self._anchors(effect.part) if a not in names]
         fit = self.fit(trial, names_all, channels, set(self._anchors(effect.part)), effect.starts or ({},))
-        before, after = self._squared(p, channels), self._squared(fit.params, channels)
+        per_before = [self._squared(p, [c]) for c in channels]
+        per_after = [self._squared(fit.params, [c]) for c in channels]
+        before, after = sum(per_before), sum(per_after)
         gain = held_out_gain_sq(before, after, self.fold, self.test)
         # Held-out change of each channel on its own: a real effect does not
         # make another view of the same joint worse.
-        worst = max(float(np.nanmean(self._squared(fit.params, [c])[self.test]) /
-                          max(np.nanmean(self._squared(p, [c])[self.test]), 1e-300)) for c in channels)
+        worst = max(float(np.nanmean(a[self.test]) / max(np.nanmean(b[self.test]), 1e-300))
+                    for b, a in zip(per_before, per_after))
         n_eff = self._n_eff(p)
         mse_b, mse_a = np.mean(before[self.train]), np.mean(after[self.train])
         dbic = n_eff * math.log(max(mse_a, 1e-300) / max(mse_b, 1e-300)) + len(names) * math.log(n_eff)
