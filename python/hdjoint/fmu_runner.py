@@ -173,7 +173,8 @@ def run_estimator_fmu(time, i_m, theta_m, theta_l, params: dict[str, float] | No
     time = np.asarray(time, float)
     n = len(time)
     params = params or {}
-    ts = params.get("Ts", 1e-3)
+    from .parameters import table
+    ts = params.get("Ts", table()["Ts"].default)
     result = np.empty((n, len(outputs)))
     with FmuInstance(fmu or fmu_path("JointTorqueEstimator"), "estimator") as inst:
         inst.start(float(time[0]), None, params, {"i_m": float(i_m[0]), "theta_m": float(theta_m[0]),
