@@ -42,3 +42,19 @@ def test_estimates_depend_on_no_parameter_outside_their_cache_key(diag, part):
         moved = value * 1.3 + 1e-3 if info.min <= value * 1.3 + 1e-3 <= info.max else info.min
         changed = ESTIMATES[part](diag.prep, dict(diag.nominal, **{name: moved}))
         np.testing.assert_array_equal(changed, base, err_msg=f"{part} estimate depends on {name}")
+
+
+def test_every_effect_of_the_library_has_its_parameters_in_the_model():
+    """The diagnosis skips an effect whose parameters the model lacks; in this
+    build every effect must be testable, so a typo cannot drop one silently."""
+    from hdjoint import parameters
+    from hdjoint.effects import EFFECTS, KINEMATIC_EXTRA
+    table = parameters.table()
+    for effect in EFFECTS.values():
+        for name in effect.params:
+            assert name in table, f"{effect.id}: no parameter {name}"
+        for start in effect.starts:
+            assert set(start) <= set(effect.params), f"{effect.id}: a start sets a parameter it does not fit"
+    for slot in KINEMATIC_EXTRA:
+        assert {f"{slot}_order", f"{slot}_a", f"{slot}_b"} <= set(table)
+    assert {"cog_order", "cog_a", "cog_b"} <= set(table)
