@@ -10,6 +10,8 @@ Run: python benchmarks/diagnosis_suite.py [--duration 30] [--markdown]
 from __future__ import annotations
 
 import argparse
+import json
+import pathlib
 import time
 
 from hdjoint.cases import CASES, nominal_for, record
@@ -28,12 +30,17 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration", type=float, default=30.0, help="seconds per recording")
     ap.add_argument("--only", help="run only cases whose name contains this")
+    ap.add_argument("--save", type=pathlib.Path, help="write each case's findings.json into this folder")
     args = ap.parse_args()
     rows = []
     for case in CASES:
         if args.only and args.only not in case.name:
             continue
         doc, seconds = run_case(case, args.duration)
+        if args.save:
+            args.save.mkdir(parents=True, exist_ok=True)
+            slug = "".join(ch if ch.isalnum() else "_" for ch in case.name)[:40]
+            (args.save / f"{slug}.json").write_text(json.dumps(doc, indent=1, default=str))
         named = [f["effect"] for f in doc["findings"]]
         hits = [e for e in case.present if e in named]
         extra = [e for e in named if e not in case.present]

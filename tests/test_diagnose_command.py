@@ -1,5 +1,6 @@
 """`hdjoint diagnose`: the contract's outputs, and bad input refused with a
 clear message and nothing written."""
+import dataclasses
 import json
 import xml.etree.ElementTree as ET
 
@@ -22,8 +23,11 @@ def gravity_case(tmp_path_factory):
     case = next(c for c in CASES if c.present == ("gravity_load",))
     d = tmp_path_factory.mktemp("gravity")
     write_recording(d / "rec.csv", record(case, duration=12.0))
+    # Another recording of the same joint, other noise: never fitted, only checked.
+    write_recording(d / "other.csv", record(dataclasses.replace(case, seed=11), duration=8.0))
     parameters.save(d / "nominal.json", nominal_for(case))
-    assert cli.main(["diagnose", str(d / "rec.csv"), "--params", str(d / "nominal.json"), "--out", str(d / "out")]) == 0
+    assert cli.main(["diagnose", str(d / "rec.csv"), "--params", str(d / "nominal.json"), "--out", str(d / "out"),
+                     "--validate", str(d / "other.csv")]) == 0
     return d
 
 
@@ -51,6 +55,31 @@ def test_gravity_load_is_found_in_the_link_and_the_corrected_model_fits_held_out
     assert first["effect"] == "gravity_load" and first["where"]["part"] == "link"
     assert first["fit"]["holdout_rms_after"] < 0.5 * first["fit"]["holdout_rms_before"]
     assert doc["params"]["mgl"] == pytest.approx(5.0, rel=0.1)  # the simulated joint's gravity torque
+
+
+def test_the_corrected_model_fits_a_recording_it_never_saw(gravity_case):
+    doc = json.loads((gravity_case / "out" / "findings.json").read_text())
+    (entry,) = doc["validation"]
+    assert entry["path"].endswith("other.csv")
+    link = entry["channels"]["link"]
+    # Gravity is in the link channel: without it the link residual is the
+    # whole mgl*sin(theta_l); with it, noise.
+    assert link["corrected"]["rms"] < 0.2 * link["calibrated"]["rms"]
+    for row in entry["channels"].values():
+        assert row["corrected"]["rms"] <= 1.05 * row["calibrated"]["rms"]
+    est = entry["estimator"]
+    assert est["corrected"]["tau_compliance"]["rms"] <= est["nominal"]["tau_compliance"]["rms"]
+    assert "Other recordings (never fitted)" in (gravity_case / "out" / "report.html").read_text()
+
+
+def test_a_malformed_validation_recording_is_refused_before_any_work(gravity_case, tmp_path, capsys):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("time,i_m,theta_m,theta_l\n0,0,0,0\n0.001,0,x,0\n")
+    out = tmp_path / "out"
+    assert cli.main(["diagnose", str(gravity_case / "rec.csv"), "--out", str(out), "--validate", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert "bad.csv" in err and "line 3" in err and "theta_m" in err
+    assert not out.exists()
 
 
 def test_corrected_parameters_run_in_the_estimator_fmu(gravity_case):

@@ -13,7 +13,7 @@ localises mismatches in: an effect lives in one part of the model.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -28,9 +28,18 @@ class Prepared:
     rec: Recording
     kin: Kinematics
     t_rel: np.ndarray  # time since the start, s
+    starts: np.ndarray = field(default_factory=lambda: np.array([0]))  # contiguous windows
 
     def __post_init__(self):
         self._smoothed: dict[int, np.ndarray] = {}
+
+    def per_window(self, func, *arrays) -> np.ndarray:
+        """func over each contiguous window on its own (state and
+        interpolation must not run across the jump between windows)."""
+        if len(self.starts) == 1:
+            return func(*arrays)
+        bounds = zip(self.starts, list(self.starts[1:]) + [len(self.rec)])
+        return np.concatenate([func(*(a[lo:hi] for a in arrays)) for lo, hi in bounds])
 
     @property
     def has_sensor(self) -> bool:
@@ -60,9 +69,12 @@ def tau_transmission(prep: Prepared, p: dict[str, float], index: np.ndarray | No
     rec = prep.rec
     if index is not None and (_get(p, "hys_H") > 0.0 or _get(p, "i_delay") > 0.0):
         return tau_transmission(prep, p)[index]
-    pick = (lambda x: x) if index is None else (lambda x: x[index])
-    return _core.compliance(parameters.for_estimator(p), pick(rec.i_m), pick(rec.theta_m),
-                            pick(rec.theta_l))["tau_compliance"]
+    if index is not None:
+        return _core.compliance(parameters.for_estimator(p), rec.i_m[index], rec.theta_m[index],
+                                rec.theta_l[index])["tau_compliance"]
+    native = parameters.for_estimator(p)
+    return prep.per_window(lambda i, tm, tl: _core.compliance(native, i, tm, tl)["tau_compliance"],
+                           rec.i_m, rec.theta_m, rec.theta_l)
 
 
 def motor_friction(p: dict, omega: np.ndarray, t_rel: np.ndarray) -> np.ndarray:
@@ -77,28 +89,39 @@ def delayed_current(prep: Prepared, delay: float) -> np.ndarray:
     rec = prep.rec
     if delay == 0.0:
         return rec.i_m
-    return np.interp(rec.time + delay, rec.time, rec.i_m)
+    return prep.per_window(lambda t, i: np.interp(t + delay, t, i), rec.time, rec.i_m)
 
 
-def tau_motor(prep: Prepared, p: dict[str, float]) -> np.ndarray:
-    """tau_M: the link-side torque the motor equation (2) implies."""
+def _smoothed_current(prep: Prepared, delay: float) -> np.ndarray:
+    if delay == 0.0:
+        return prep.smoothed("i_m", prep.rec.i_m)
+    return prep.kin.smooth(delayed_current(prep, delay))
+
+
+def tau_motor(prep: Prepared, p: dict[str, float], index: np.ndarray | None = None) -> np.ndarray:
+    """tau_M: the link-side torque the motor equation (2) implies (at `index` only, if given)."""
     rec, kin = prep.rec, prep.kin
-    delay = _get(p, "i_delay")
-    i = prep.smoothed("i_m", rec.i_m) if delay == 0.0 else kin.smooth(delayed_current(prep, delay))
-    drive = p["Kt"] * i - p["Jm"] * kin.alpha_m - motor_friction(p, kin.omega_m, prep.t_rel)
+    pick = (lambda x: x) if index is None else (lambda x: x[index])
+    # The delay and the ripple pass through the smoothing filter, which needs
+    # the whole run; everything else is pointwise.
+    i = pick(_smoothed_current(prep, _get(p, "i_delay")))
+    omega = pick(kin.omega_m)
+    drive = p["Kt"] * i - p["Jm"] * pick(kin.alpha_m) - motor_friction(p, omega, pick(prep.t_rel))
     a, b = _get(p, "cog_a"), _get(p, "cog_b")
     if a or b:  # ripple at the motor angle's orders: through the same filter as the current
         order = _get(p, "cog_order")
-        drive = drive + kin.smooth(a * np.cos(order * rec.theta_m) + b * np.sin(order * rec.theta_m))
+        drive = drive + pick(kin.smooth(a * np.cos(order * rec.theta_m) + b * np.sin(order * rec.theta_m)))
     return p["N"] * drive
 
 
-def tau_link(prep: Prepared, p: dict[str, float]) -> np.ndarray:
-    """tau_L: the torque the link's own dynamics need (no external torque)."""
+def tau_link(prep: Prepared, p: dict[str, float], index: np.ndarray | None = None) -> np.ndarray:
+    """tau_L: the torque the link's own dynamics need (no external torque; at `index` only, if given)."""
     rec, kin = prep.rec, prep.kin
-    friction = _get(p, "Fl") * np.tanh(kin.omega_l * p["N"] / _get(p, "omega_fc"))
-    return (_get(p, "Jl") * kin.alpha_l + _get(p, "Bl") * kin.omega_l
-            + _get(p, "mgl") * np.sin(rec.theta_l) + friction)
+    pick = (lambda x: x) if index is None else (lambda x: x[index])
+    omega = pick(kin.omega_l)
+    friction = _get(p, "Fl") * np.tanh(omega * p["N"] / _get(p, "omega_fc"))
+    return (_get(p, "Jl") * pick(kin.alpha_l) + _get(p, "Bl") * omega
+            + _get(p, "mgl") * np.sin(pick(rec.theta_l)) + friction)
 
 
 ESTIMATES = {"transmission": tau_transmission, "motor": tau_motor, "link": tau_link}

@@ -95,10 +95,15 @@ def cmd_diagnose(args) -> int:
     import tempfile
     from . import parameters, report
     from .diagnosis import DiagnosisError, diagnose
+    from .validation import summary_line, validate
     rec = _read(args.recording)
+    others = [_read(path) for path in args.validate]  # read first: a bad file stops before any work
     nominal = _params(args.params)
     try:
         diag, doc = diagnose(rec, nominal, progress=lambda m: print(f"[diagnose] {m}", file=sys.stderr, flush=True))
+        if others:
+            print("[diagnose] checking the corrected model on the other recordings", file=sys.stderr, flush=True)
+            doc["validation"] = [validate(o, diag.nominal, diag.calibrated_params, doc["params"]) for o in others]
     except DiagnosisError as e:
         raise UserError(str(e)) from None
     page = report.build(diag, doc)
@@ -121,6 +126,8 @@ def cmd_diagnose(args) -> int:
               f"{fit['holdout_rms_before']:.4f} -> {fit['holdout_rms_after']:.4f} N.m")
     for u in doc["unexplained"]:
         print(f"  unexplained: {u['channel']} residual depends on {u['feature']} (largest at {u['largest_at']})")
+    for v in doc.get("validation", []):
+        print(f"  validation: {summary_line(v)}")
     print(f"wrote {out}/findings.json, params.json, params.ssv, report.html ({doc['seconds']} s)")
     return 0
 
@@ -161,6 +168,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("recording")
     p.add_argument("--params", help="the nominal parameter set (JSON)")
     p.add_argument("--out", required=True, help="directory for findings.json, params.json, params.ssv, report.html")
+    p.add_argument("--validate", nargs="+", default=[], metavar="RECORDING",
+                   help="other recordings of the same joint: the corrected model is checked on them (never fitted)")
     p.set_defaults(run=cmd_diagnose)
 
     p = sub.add_parser("demo", help="the main job on built-in data: FMUs, estimation, paper table, report")

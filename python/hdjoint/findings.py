@@ -122,7 +122,7 @@ def estimator_comparison(diag, corrected) -> dict | None:
     """Torque estimators' error against the sensor with nominal vs corrected parameters."""
     if not diag.has_sensor:
         return None
-    rec = diag.rec
+    rec = diag.source  # the estimators run over the whole recording, not the analysed windows
     out = {}
     for label, p in (("nominal", diag.nominal), ("corrected", corrected)):
         try:
@@ -170,8 +170,8 @@ def document(diag, final_params: dict, unexplained: list[dict]) -> dict:
         "unexplained": unexplained,
         "noise": {c: round(s, 6) for c, s in diag.sigma.items()},
         "estimator": estimator_comparison(diag, final_params),
-        "recording": {"path": diag.rec.path, "samples": len(diag.rec), "duration": diag.rec.duration,
-                      "torque_sensor": diag.has_sensor},
+        "recording": {"path": diag.source.path, "samples": len(diag.source), "duration": diag.source.duration,
+                      "torque_sensor": diag.has_sensor, "analysed_samples": len(diag.rec)},
     }
 
 

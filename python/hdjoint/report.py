@@ -44,6 +44,23 @@ def _fmt(x) -> str:
     return f"{x:.4g}" if isinstance(x, (int, float)) else str(x)
 
 
+def _validation_section(entries: list[dict]) -> str:
+    rows = []
+    for v in entries:
+        for channel, row in v["channels"].items():
+            rows.append((v["path"], channel, _fmt(row["nominal"]["rms"]), _fmt(row["calibrated"]["rms"]),
+                         _fmt(row["corrected"]["rms"]), _fmt(row["calibrated"]["max"]), _fmt(row["corrected"]["max"])))
+        e = v.get("estimator")
+        if e and "error" not in e["nominal"] and "error" not in e["corrected"]:
+            for name in ("tau_compliance", "tau_ukf"):
+                rows.append((v["path"], f"{name} vs sensor", _fmt(e["nominal"][name]["rms"]), "",
+                             _fmt(e["corrected"][name]["rms"]), "", _fmt(e["corrected"][name]["max"])))
+    return ("<h2>Other recordings (never fitted)</h2><p>The corrected model on recordings the diagnosis did not "
+            "see: residual per channel with the nominal, the calibrated (no findings) and the corrected "
+            "parameters.</p>" + _table(rows, ["recording", "channel", "RMS nominal", "RMS calibrated",
+                                                "RMS corrected", "max calibrated", "max corrected"]))
+
+
 def build(diag, doc: dict) -> str:
     """The report's HTML for a finished diagnosis and its findings document."""
     rec, kin = diag.rec, diag.prep.kin
@@ -109,6 +126,8 @@ def build(diag, doc: dict) -> str:
         fit_html += "<h3>Torque estimators against the torque sensor</h3>" + _table(
             rows, ["estimate", "RMS nominal", "RMS corrected", "max nominal", "max corrected"])
     sections.append("<h2>Fit before and after</h2>" + fit_html)
+    if doc.get("validation"):
+        sections.append(_validation_section(doc["validation"]))
 
     cal = [(n, _fmt(v["nominal"]), _fmt(v["calibrated"])) for n, v in doc["calibration"].items()]
     sections.append("<h2>Calibration of the nominal parameters</h2>" + _table(cal, ["parameter", "nominal",
