@@ -170,8 +170,10 @@ class Diagnosis:
         n = len(rec)
         # The folds: contiguous blocks, or the sampled windows themselves.
         self.fold = make_folds(n, FOLDS) if len(starts) == 1 else window_labels(n, starts)
-        self.train = self.fold % 2 == 0
-        self.test = ~self.train
+        # Samples where the smoothing filter runs off a window's ends take no part.
+        self.train = (self.fold % 2 == 0) & self.prep.kin.valid
+        self.test = (self.fold % 2 == 1) & self.prep.kin.valid
+        self.used = self.train | self.test
         stride = max(1, int(np.count_nonzero(self.train) // FIT_SAMPLES))
         self.fit_index = np.flatnonzero(self.train)[::stride]
         self.sigma = {c.name: 1.0 for c in self.channels}
@@ -180,6 +182,10 @@ class Diagnosis:
         self.calibration: dict[str, tuple[float, float]] = {}
         self.a0_shift = 0.0
         self.tested: list[dict] = []  # every hypothesis tried, per round (evidence for the report)
+
+    def shown_residual(self, channel: Channel, p: dict) -> np.ndarray:
+        """The residual for figures and figures of merit: NaN where no test looks."""
+        return np.where(self.used, self.eval.residual(channel, p), np.nan)
 
     # ---- fitting -------------------------------------------------------------
     def _channels_of(self, part: str) -> list[Channel]:
@@ -216,36 +222,44 @@ class Diagnosis:
 
     def fit(self, p: dict, names: list[str], channels: list[Channel], calibrating: set[str],
             starts: tuple[dict, ...] = ({},)) -> Fit:
-        """Least squares over `names` on the training sample, from each start; the best fit."""
-        best = None
-        for start in starts:
-            x0_params = dict(p, **start)
-            x0 = np.array([x0_params[n] for n in names], float)
-            bounds = [self._bounds(n, self.nominal.get(n, x0_params[n]) if n in calibrating else x0_params[n],
-                                   n in calibrating) for n in names]
-            lo = np.array([b[0] for b in bounds])
-            hi = np.array([b[1] for b in bounds])
-            x0 = np.clip(x0, lo, hi)
-            scale = np.maximum(np.abs(x0), np.maximum((hi - lo) * 1e-3, 1e-12))
-            scale = np.where(np.isfinite(scale), scale, 1.0)
+        """Least squares over `names` on the training sample: a few iterations
+        from each start, then the best of them to convergence."""
+        full = 60 * (len(names) + 1)
+        if len(starts) == 1:
+            return self._least_squares(dict(p, **starts[0]), names, channels, calibrating, full)
+        tries = [self._least_squares(dict(p, **start), names, channels, calibrating, 5) for start in starts]
+        best = min(tries, key=lambda f: f.cost)
+        if not np.isfinite(best.cost):
+            return best
+        return self._least_squares(best.params, names, channels, calibrating, full)
 
-            def residuals(z):
-                trial = dict(p)
-                trial.update(zip(names, z * scale))
-                return self._normalised(trial, channels, self.fit_index)
+    def _least_squares(self, x0_params: dict, names: list[str], channels: list[Channel],
+                       calibrating: set[str], max_nfev: int) -> Fit:
+        """One bounded trust-region fit from x0_params; bounds of calibrated
+        parameters are taken around their nominal values."""
+        x0 = np.array([x0_params[n] for n in names], float)
+        bounds = [self._bounds(n, self.nominal.get(n, x0_params[n]) if n in calibrating else x0_params[n],
+                               n in calibrating) for n in names]
+        lo = np.array([b[0] for b in bounds])
+        hi = np.array([b[1] for b in bounds])
+        x0 = np.clip(x0, lo, hi)
+        scale = np.maximum(np.abs(x0), np.maximum((hi - lo) * 1e-3, 1e-12))
+        scale = np.where(np.isfinite(scale), scale, 1.0)
 
-            try:
-                sol = least_squares(residuals, x0 / scale, bounds=(lo / scale, hi / scale), method="trf",
-                                    x_scale="jac", max_nfev=60 * (len(names) + 1), diff_step=1e-6)
-            except ValueError:
-                continue
-            fitted = dict(p)
-            fitted.update(zip(names, sol.x * scale))
-            if best is None or sol.cost < best.cost:
-                best = Fit(fitted, list(names), float(sol.cost))
-        if best is None:
-            return Fit(dict(p), list(names), float("inf"))
-        return best
+        def residuals(z):
+            trial = dict(x0_params)
+            trial.update(zip(names, z * scale))
+            return self._normalised(trial, channels, self.fit_index)
+
+        try:
+            # max_nfev counts steps (scipy does not count the finite-difference Jacobian's calls).
+            sol = least_squares(residuals, x0 / scale, bounds=(lo / scale, hi / scale), method="trf",
+                                x_scale="jac", max_nfev=max_nfev, diff_step=1e-6)
+        except ValueError:
+            return Fit(dict(x0_params), list(names), float("inf"))
+        fitted = dict(x0_params)
+        fitted.update(zip(names, sol.x * scale))
+        return Fit(fitted, list(names), float(sol.cost))
 
     # ---- the steps -------------------------------------------------------------
     def reference_torque(self, p) -> np.ndarray:
@@ -282,7 +296,8 @@ class Diagnosis:
                 # Weights equalise the channels' residual levels: smoothed
                 # channels have no white floor that differences would reveal.
                 r = self.eval.residual(c, p)
-                self.sigma[c.name] = max(float(np.sqrt(np.nanmean(r * r))), 1e-9)
+                used = r[self.used]
+                self.sigma[c.name] = max(float(np.sqrt(np.nanmean(used * used))), 1e-9)
         self.calibration = {n: (self.nominal.get(n, parameters.table()[n].default), p[n]) for n in names}
         self.calibrated_names = names
         return p
@@ -294,7 +309,9 @@ class Diagnosis:
         found = []
         motor_orders = [k / 2 for k in range(1, 25) if k / 2 * travel_m >= 3 * np.pi]
         exclude_m = (p["omega_w"], 2 * p["omega_w"]) if part == "transmission" else ()
-        found += order_search(rec.theta_m, r, self.fold, self.train, self.test, motor_orders, exclude_m, "theta_m")
+        smoothed = self.prep.kin.smooth if part in SMOOTHED_PARTS else None
+        found += order_search(rec.theta_m, r, self.fold, self.train, self.test, motor_orders, exclude_m, "theta_m",
+                              through=smoothed)
         if part == "transmission":
             link_orders = [k for k in range(1, 41) if k * travel_l >= 3 * np.pi]
             found += order_search(rec.theta_l, r, self.fold, self.train, self.test, link_orders, (p["omega_l"],),
@@ -322,7 +339,14 @@ class Diagnosis:
         return p, list(effect.params), []
 
     def _anchors(self, part: str) -> list[str]:
-        return {"transmission": ["a0"], "motor": [], "link": []}[part]
+        """The calibrated parameters of `part`, refitted with every hypothesis
+        of that part: calibration has already absorbed what it could of the
+        missing effect (a viscous term leaks into Kt and Fc), and a hypothesis
+        judged against that absorption alone helps some folds and hurts the rest."""
+        own = calibrated_parameters(part, self.nominal, self.has_sensor)
+        # The eq. (7) terms are orthogonal to every other effect (they live at
+        # their own angle orders): left out, they make each fit much cheaper.
+        return [n for n in self.calibrated_names if n in own and n not in KINEMATIC_EQ7]
 
     def _n_eff(self, p) -> float:
         """Training samples divided by the residual's correlation length."""

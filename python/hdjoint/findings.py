@@ -56,9 +56,9 @@ def regimes(diag, reference) -> dict[str, np.ndarray]:
 
 def where(diag, finding) -> dict:
     channel = diag._channels_of(finding.effect.part)[0]
-    before = diag.eval.residual(channel, finding.params_before)
-    after = diag.eval.residual(channel, finding.params_after)
-    contribution = before - after
+    before = diag.shown_residual(channel, finding.params_before)
+    after = diag.shown_residual(channel, finding.params_after)
+    contribution = np.nan_to_num(before - after)
     step = float(np.median(np.diff(diag.rec.time)))
     smooth = _smooth(contribution, int(0.05 / step))
     peak = np.nanmax(np.abs(smooth)) or 1.0
@@ -88,8 +88,8 @@ def where(diag, finding) -> dict:
 
 def fit_figures(diag, finding) -> dict:
     channel = diag._channels_of(finding.effect.part)[0]
-    before = diag.eval.residual(channel, finding.params_before)
-    after = diag.eval.residual(channel, finding.params_after)
+    before = diag.shown_residual(channel, finding.params_before)
+    after = diag.shown_residual(channel, finding.params_after)
     return {"channel": channel.name, "rms_before": _rms(before), "rms_after": _rms(after),
             "holdout_rms_before": _rms(before[diag.test]), "holdout_rms_after": _rms(after[diag.test])}
 
@@ -110,7 +110,7 @@ def remaining_structure(diag, p) -> list[dict]:
     }
     found = []
     for c in diag.channels:
-        r = diag.eval.residual(c, p)
+        r = diag.shown_residual(c, p)
         for s in scan(np.nan_to_num(r), features, diag.fold, diag.train, diag.test):
             if s.gain.gain > 0.02 and s.gain.z > 4.0:
                 found.append({"channel": c.name, "feature": s.feature, "held_out_gain": round(s.gain.gain, 4),

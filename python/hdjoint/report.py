@@ -71,7 +71,7 @@ def build(diag, doc: dict) -> str:
     segs = [s for f in doc["findings"] for s in f["where"]["time_segments"]]
     figs = []
     for c in diag.channels:
-        before, after = diag.eval.residual(c, p0), diag.eval.residual(c, p1)
+        before, after = diag.shown_residual(c, p0), diag.shown_residual(c, p1)
         figs.append(_img(_figure(lambda ax: dp.residual_over_time(ax, rec.time, before, after, segs,
                                                                    f"{c.name} residual")),
                          f"Residual of the {c.name} channel over time (located segments shaded)"))
@@ -114,8 +114,8 @@ def build(diag, doc: dict) -> str:
 
     # Fit before/after and the estimator.
     labels = [c.name for c in diag.channels]
-    rb = [float(np.sqrt(np.nanmean(diag.eval.residual(c, p0)[diag.test] ** 2))) for c in diag.channels]
-    ra = [float(np.sqrt(np.nanmean(diag.eval.residual(c, p1)[diag.test] ** 2))) for c in diag.channels]
+    rb = [float(np.sqrt(np.nanmean(diag.shown_residual(c, p0)[diag.test] ** 2))) for c in diag.channels]
+    ra = [float(np.sqrt(np.nanmean(diag.shown_residual(c, p1)[diag.test] ** 2))) for c in diag.channels]
     fit_html = _img(_figure(lambda ax: dp.rms_bars(ax, labels, rb, ra, "held-out RMS residual (N.m)"), (6, 3)),
                     "Held-out residual RMS per channel: calibrated nominal vs corrected model")
     if doc.get("estimator"):

@@ -95,41 +95,41 @@ class Order:
     prominence: float  # power at this order over the median power at off-orders
 
 
-def _harmonic_fit(angle, residual, order, train):
-    """Least-squares cosine, sine and mean of `residual` at `order` of `angle`
-    on the training samples (normal equations: 3 unknowns, well conditioned
-    for any order that turns more than once)."""
-    basis = np.stack([np.cos(order * angle), np.sin(order * angle), np.ones_like(angle)])
-    fit = basis[:, train]
-    coef = np.linalg.solve(fit @ fit.T, fit @ residual[train])
-    return coef[:2] @ basis[:2], float(np.hypot(coef[0], coef[1]))
+def _basis(angle, order, through):
+    """cos, sin of `order` x `angle` (through the channel's filter, if it has
+    one: a ripple the channel sees smoothed fades with speed) and a constant."""
+    c, s = np.cos(order * angle), np.sin(order * angle)
+    if through is not None:
+        c, s = through(c), through(s)
+    return np.stack([c, s, np.ones_like(angle)])
 
 
-def _harmonic_amplitude(angle, residual, order):
-    """The amplitude alone (for the spectrum's floor): same fit, no prediction."""
-    basis = np.stack([np.cos(order * angle), np.sin(order * angle), np.ones_like(angle)])
-    coef = np.linalg.solve(basis @ basis.T, basis @ residual)
-    return float(np.hypot(coef[0], coef[1]))
+def _harmonic_coefficients(basis, residual, rows):
+    fit = basis[:, rows]
+    return np.linalg.solve(fit @ fit.T, fit @ residual[rows])
 
 
 def order_search(angle, residual, fold, train, test, orders, exclude=(), name="theta_m",
-                 max_orders: int = 2) -> list[Order]:
+                 max_orders: int = 2, through=None) -> list[Order]:
     """Angle-synchronous analysis: least-squares power of the residual at each
     candidate order of `angle`; an order counts when its held-out gain is
     significant and it stands out of the spectrum (off-orders, at +1/4,
-    give the floor that broadband structure and noise produce)."""
+    give the floor that broadband structure and noise produce). `through`:
+    the smoothing filter the residual channel sees the world through."""
     ok = np.isfinite(residual)
     res = np.where(ok, residual, 0.0)
     train, test = train & ok, test & ok
+    # The floor needs no held-out prediction: every 4th training sample will do.
+    floor_rows = np.flatnonzero(train)[::4]
     found = []
-    # The floor needs no held-out prediction, and every 4th training sample
-    # resolves any order below the sampling rate's many thousands.
-    floor_angle, floor_res = angle[train][::4], res[train][::4]
     for k in orders:
         if any(abs(k - e) < 1e-9 for e in exclude):
             continue
-        pred, amp = _harmonic_fit(angle, res, k, train)
-        floor = np.median([_harmonic_amplitude(floor_angle, floor_res, k + d) for d in (-0.27, 0.23, 0.31)])
+        basis = _basis(angle, k, through)
+        coef = _harmonic_coefficients(basis, res, train)
+        pred, amp = coef[:2] @ basis[:2], float(np.hypot(coef[0], coef[1]))
+        floor = np.median([np.hypot(*_harmonic_coefficients(_basis(angle, k + d, through), res, floor_rows)[:2])
+                           for d in (-0.27, 0.23, 0.31)])
         found.append(Order(name, float(k), amp, held_out_gain(res, pred, fold, test), amp / max(floor, 1e-300)))
     good = [o for o in found if o.gain.significant and o.prominence > 3.0]
     return sorted(good, key=lambda o: -o.gain.gain)[:max_orders]

@@ -37,7 +37,7 @@ def validate(rec: Recording, nominal: dict, calibrated: dict, corrected: dict) -
     for c in channels:
         row = {}
         for label, p in sets.items():
-            f = error_figures(evaluator.residual(c, p), 0.0)
+            f = error_figures(evaluator.residual(c, p)[prep.kin.valid], 0.0)
             row[label] = {"rms": round(f.rms, 5), "max": round(f.max, 5)}
         figures[c.name] = row
     return {"path": rec.path, "duration": round(rec.duration, 3), "channels": figures,
