@@ -31,5 +31,6 @@ fetch org.into-cps.vdmcheck.fmi2:vdmcheck2:1.1.3:zip:distribution-rules vdmcheck
 if [ ! -d "$TOOLS/vdmcheck2" ]; then
   rm -rf "$TOOLS/vdmcheck2.tmp" && mkdir -p "$TOOLS/vdmcheck2.tmp"
   python3 -m zipfile -e "$TOOLS/vdmcheck2-1.1.3-distribution-rules.zip" "$TOOLS/vdmcheck2.tmp"
+  chmod +x "$TOOLS"/vdmcheck2.tmp/*/VDMCheck2.sh   # zip extraction drops the execute bit the script relies on
   mv "$TOOLS/vdmcheck2.tmp" "$TOOLS/vdmcheck2"
 fi

@@ -139,7 +139,8 @@ def run_fmpy(ssp: str | Path, stop_time: float, step: float, parameters: dict[st
 
 # ---- libcosim -------------------------------------------------------------------------------
 
-def run_libcosim(source: str | Path, stop_time: float, step: float, kind: str = "ssp") -> Trajectories:
+def run_libcosim(source: str | Path, stop_time: float, step: float, kind: str = "ssp",
+                 parameters: dict[str, float] | None = None) -> Trajectories:
     """libcosim through libcosimpy, from the SSP (unpacked; libcosim reads
     the .ssd next to its resources) or from an OspSystemStructure.xml.
     Values are read after every step (last-value observer)."""
@@ -155,14 +156,18 @@ def run_libcosim(source: str | Path, stop_time: float, step: float, kind: str = 
         raise ValueError(f"kind must be 'ssp' or 'osp', not {kind!r}")
     observer = CosimObserver.create_last_value()
     execution.add_observer(observer)
-    refs = {}
+    refs, everything = {}, {}
     for info in execution.slave_infos():
         slave = info.name.decode()
         index = info.index
         for v in execution.slave_variables(index):
             name = f"{slave}.{v.name.decode()}"
+            everything[name] = (index, v.reference)
             if name in SIGNALS:
                 refs[name] = (index, v.reference)
+    for name, value in (parameters or {}).items():
+        if name not in everything or not execution.real_initial_value(*everything[name], float(value)):
+            raise ValueError(f"libcosim cannot set {name}")
     n = _steps(stop_time, step)
     out = {name: np.empty(n) for name in refs}
     for k in range(n):
@@ -175,7 +180,8 @@ def run_libcosim(source: str | Path, stop_time: float, step: float, kind: str = 
 
 # ---- ecos ----------------------------------------------------------------------------------------
 
-def run_ecos(ssp: str | Path, stop_time: float, step: float) -> Trajectories:
+def run_ecos(ssp: str | Path, stop_time: float, step: float, parameters: dict[str, float] | None = None
+             ) -> Trajectories:
     """ecos through ecospy, from the SSP; values read after every step."""
     from ecospy import EcosSimulation
     system = read_system(ssp)
@@ -183,6 +189,9 @@ def run_ecos(ssp: str | Path, stop_time: float, step: float) -> Trajectories:
     n = _steps(stop_time, step)
     out = {name: np.empty(n) for name in names}
     with EcosSimulation(ssp_path=str(ssp), step_size=step) as sim:
+        for name, value in (parameters or {}).items():
+            component, variable = name.split(".", 1)
+            sim.set_real(f"{component}::{variable}", float(value))
         if not sim.init():
             raise RuntimeError("ecos failed to initialise the system")
         for k in range(n):
@@ -196,7 +205,8 @@ def run_ecos(ssp: str | Path, stop_time: float, step: float) -> Trajectories:
 
 # ---- INTO-CPS Maestro --------------------------------------------------------------------------
 
-def maestro_config(ssp: str | Path, fmu_dir: Path, stop_time: float, step: float) -> dict:
+def maestro_config(ssp: str | Path, fmu_dir: Path, stop_time: float, step: float,
+                   parameters: dict[str, float] | None = None) -> dict:
     """Maestro's sg1 (multi-model + co-simulation) configuration of the SSP's
     system: the same FMUs and connections, read from the .ssd."""
     system = read_system(ssp)
@@ -209,13 +219,17 @@ def maestro_config(ssp: str | Path, fmu_dir: Path, stop_time: float, step: float
         component, variable = name.split(".", 1)
         if component in system.components:
             log.setdefault(f"{{{component}}}.{component}", []).append(variable)
-    return {"fmus": fmus, "connections": connections, "logVariables": log, "parameters": {},
+    values = {}
+    for name, value in (parameters or {}).items():
+        component, variable = name.split(".", 1)
+        values[f"{{{component}}}.{component}.{variable}"] = float(value)
+    return {"fmus": fmus, "connections": connections, "logVariables": log, "parameters": values,
             "algorithm": {"type": "fixed-step", "size": step}, "startTime": 0.0, "endTime": stop_time,
             "loggingOn": False}
 
 
-def run_maestro(ssp: str | Path, stop_time: float, step: float, jar: str | Path, timeout: float = 600.0
-                ) -> Trajectories:
+def run_maestro(ssp: str | Path, stop_time: float, step: float, jar: str | Path, timeout: float = 600.0,
+                parameters: dict[str, float] | None = None) -> Trajectories:
     """INTO-CPS Maestro 3 (`import sg1 --interpret`). Its outputs.csv has a
     row at the start time (initial values) and one after every step."""
     import csv
@@ -224,7 +238,7 @@ def run_maestro(ssp: str | Path, stop_time: float, step: float, jar: str | Path,
         work = Path(tmp)
         with zipfile.ZipFile(ssp) as z:
             z.extractall(work / "ssp")
-        config = maestro_config(ssp, work / "ssp" / "resources", stop_time, step)
+        config = maestro_config(ssp, work / "ssp" / "resources", stop_time, step, parameters)
         (work / "config.json").write_text(json.dumps(config, indent=1))
         proc = subprocess.run(["java", "-jar", str(jar), "import", "sg1", str(work / "config.json"),
                                f"-output={work / 'out'}", "--interpret"],
@@ -266,41 +280,44 @@ def maestro_jar() -> Path | None:
     return None
 
 
-def run(master: str, system: str, stop_time: float, step: float) -> Trajectories:
-    """One master on a shipped system (in this process)."""
+def run(master: str, system: str, stop_time: float, step: float, parameters: dict[str, float] | None = None
+        ) -> Trajectories:
+    """One master on a shipped system (in this process); `parameters` maps
+    "component.variable" to a start value, set through the master's own API."""
     ssp = ssp_path(system)
     if master == "fmpy":
-        return run_fmpy(ssp, stop_time, step)
+        return run_fmpy(ssp, stop_time, step, parameters)
     if master == "ecos":
-        return run_ecos(ssp, stop_time, step)
+        return run_ecos(ssp, stop_time, step, parameters)
     if master == "maestro":
         jar = maestro_jar()
         if jar is None:
             raise FileNotFoundError("the Maestro jar is missing: run scripts/install_cosim.sh")
-        return run_maestro(ssp, stop_time, step, jar)
+        return run_maestro(ssp, stop_time, step, jar, parameters=parameters)
     if master in ("libcosim-ssp", "libcosim-osp"):
         with tempfile.TemporaryDirectory(prefix="hdjoint-libcosim-") as tmp:
             work = Path(tmp)
             with zipfile.ZipFile(ssp) as z:
                 z.extractall(work)
             if master == "libcosim-ssp":
-                return run_libcosim(work, stop_time, step, "ssp")
+                return run_libcosim(work, stop_time, step, "ssp", parameters)
             if system != "JointTorqueFeedback":
                 raise ValueError("the OSP structure describes the JointTorqueFeedback system only")
             for fmu in (work / "resources").glob("*.fmu"):
                 shutil.copy(fmu, work / fmu.name)
             shutil.copy(osp_structure_path(), work / "OspSystemStructure.xml")
-            return run_libcosim(work / "OspSystemStructure.xml", stop_time, step, "osp")
+            return run_libcosim(work / "OspSystemStructure.xml", stop_time, step, "osp", parameters)
     raise ValueError(f"unknown master '{master}'; known: {', '.join(MASTERS)}")
 
 
 def run_in_subprocess(master: str, system: str, stop_time: float, step: float, timeout: float = 600.0,
-                      cpu: int | None = None) -> Trajectories:
+                      cpu: int | None = None, parameters: dict[str, float] | None = None) -> Trajectories:
     """`run` in a child Python, so a master that aborts cannot take the caller
     down; `cpu` pins the child to one core (for timing)."""
     with tempfile.TemporaryDirectory(prefix="hdjoint-master-") as tmp:
         out = Path(tmp) / "result.npz"
-        cmd = [sys.executable, "-m", "hdjoint.cosim", master, system, str(stop_time), str(step), str(out)]
+        cmd = [sys.executable, "-m", "hdjoint.cosim", master, system, str(stop_time), str(step), str(out),
+               json.dumps(parameters or {})]
         if cpu is not None and shutil.which("taskset"):
             cmd = ["taskset", "-c", str(cpu)] + cmd
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
@@ -312,11 +329,13 @@ def run_in_subprocess(master: str, system: str, stop_time: float, step: float, t
 
 def main(argv: list[str] | None = None) -> int:
     args = sys.argv[1:] if argv is None else argv
-    if len(args) != 5:
-        print("usage: python -m hdjoint.cosim MASTER SYSTEM STOP_TIME STEP OUT.npz", file=sys.stderr)
+    if len(args) not in (5, 6):
+        print("usage: python -m hdjoint.cosim MASTER SYSTEM STOP_TIME STEP OUT.npz [PARAMETERS_JSON]",
+              file=sys.stderr)
         return 2
-    master, system, stop_time, step, out = args
-    run(master, system, float(stop_time), float(step)).save(out)
+    master, system, stop_time, step, out = args[:5]
+    parameters = json.loads(args[5]) if len(args) == 6 else None
+    run(master, system, float(stop_time), float(step), parameters).save(out)
     return 0
 
 
