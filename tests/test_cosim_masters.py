@@ -139,6 +139,23 @@ def test_master_matches_fmpy_once_fmpys_first_step_is_forgotten(master):
         assert diff[early].max() > 100 * diff[late].max(), f"{name}: no start-up difference to forget"
 
 
+@pytest.mark.parametrize("name", ["JointController", "HarmonicDriveJoint", "JointTorqueEstimator"])
+def test_fmpy_simulate_fmu_runs_each_fmu_alone(name):
+    """fmpy's one-call simulate_fmu on each FMU with its defaults (inputs at
+    their start values), with a step of floating-point noise."""
+    from fmpy import simulate_fmu
+    from hdjoint.fmus import fmu_path
+    result = simulate_fmu(str(fmu_path(name)), stop_time=2.5, step_size=0.0009999999999976694,
+                          output_interval=0.0009999999999976694)
+    outputs = [n for n in result.dtype.names if n != "time"]
+    assert outputs and len(result) > 2000
+    for n in outputs:
+        assert np.all(np.isfinite(result[n])), n
+    if name == "JointController":
+        # Its reference and load run on their own: the load step is on at 2 s.
+        assert result["tau_ext"][-1] == 2.0 and np.ptp(result["theta_ref"]) > 0.5
+
+
 def test_osp_structure_connects_what_the_ssp_connects():
     system = cosim.read_system(cosim.ssp_path("JointTorqueFeedback"))
     ns = {"osp": "http://opensimulationplatform.com/MSMI/OSPSystemStructure"}
