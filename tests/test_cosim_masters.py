@@ -32,9 +32,11 @@ What the masters share and where they differ, and so the tolerances:
 """
 from __future__ import annotations
 
+import os
 import shutil
 import xml.etree.ElementTree as ET
 import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -46,6 +48,11 @@ STEP = 1e-3         # s: the FMUs' sample period
 EXTERNAL = ("libcosim-ssp", "libcosim-osp", "ecos", "maestro")
 SMOOTH = {"joint.motor_counts": 0.0, "joint.link_counts": 0.0}   # quantisation off
 LINK_COUNT = 2 * np.pi / 524288
+
+# The jar scripts/install_cosim.sh fetches into the checkout (found wherever pytest runs from).
+_JAR = Path(__file__).resolve().parents[1] / "build" / "cosim-tools" / "maestro-3.1.1-jar-with-dependencies.jar"
+if _JAR.is_file():
+    os.environ.setdefault("HDJOINT_MAESTRO_JAR", str(_JAR))
 
 
 def available(master: str) -> str | None:
