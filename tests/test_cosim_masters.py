@@ -146,6 +146,24 @@ def test_master_matches_fmpy_once_fmpys_first_step_is_forgotten(master):
         assert diff[early].max() > 100 * diff[late].max(), f"{name}: no start-up difference to forget"
 
 
+@pytest.mark.parametrize("master", ["libcosim-ssp", "ecos"])
+def test_the_sensor_variant_runs_the_same_in_the_masters(master):
+    """JointTorqueFeedbackSensor.ssp (the torque loop on joint.tau_joint):
+    the same bounds against fmpy as the shipped system."""
+    reason = available(master)
+    if reason:
+        pytest.skip(reason)
+    ref = cosim.run_in_subprocess("fmpy", "JointTorqueFeedbackSensor", STOP, STEP, timeout=600)
+    other = cosim.run_in_subprocess(master, "JointTorqueFeedbackSensor", STOP, STEP, timeout=600)
+    assert np.array_equal(other["controller.theta_ref"], ref["controller.theta_ref"])
+    assert np.abs(other["joint.theta_l"] - ref["joint.theta_l"]).max() <= 8 * LINK_COUNT
+    d = other["joint.tau_joint"] - ref["joint.tau_joint"]
+    assert np.sqrt(np.mean(d ** 2)) <= 0.2
+    # And it is not the estimate-fed system: the torque loop sees another signal.
+    shipped = run(master)
+    assert np.abs(shipped["controller.i_m"] - other["controller.i_m"]).max() > 0.1
+
+
 @pytest.mark.parametrize("name", ["JointController", "HarmonicDriveJoint", "JointTorqueEstimator"])
 def test_fmpy_simulate_fmu_runs_each_fmu_alone(name):
     """fmpy's one-call simulate_fmu on each FMU with its defaults (inputs at
