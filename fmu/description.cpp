@@ -44,6 +44,7 @@ std::string number(double v) {
 struct BaseUnits { int kg, m, s, A, rad; };
 const std::map<std::string, BaseUnits>& unit_table() {
     static const std::map<std::string, BaseUnits> table = {
+        {"A/rad", {0, 0, 0, 1, -1}}, {"A.s/rad", {0, 0, 1, 1, -1}},  // JointController gains
         {"1", {0, 0, 0, 0, 0}},       {"rad", {0, 0, 0, 0, 1}},      {"rad/s", {0, 0, -1, 0, 1}},
         {"A", {0, 0, 0, 1, 0}},       {"s", {0, 0, 1, 0, 0}},        {"N.m", {1, 2, -2, 0, 0}},
         {"N.m/A", {1, 2, -2, -1, 0}}, {"N.m/rad", {1, 2, -2, 0, -1}}, {"kg.m2", {1, 2, 0, 0, 0}},

@@ -4,6 +4,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install.sh
+# The other co-simulation masters and FMI checkers (PyPI, Debian, Maven Central).
+bash scripts/install_cosim.sh
 
 # From Debian: GoogleTest for the C++ tests, Chromium for the report-rendering test.
 missing=()

@@ -4,7 +4,7 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
-FMU_NAMES = ("JointTorqueEstimator", "HarmonicDriveJoint")
+FMU_NAMES = ("JointTorqueEstimator", "HarmonicDriveJoint", "JointController")
 _FMU_DIR = Path(__file__).parent / "fmus"
 
 
