@@ -3,8 +3,8 @@ controls stay consistent, and the effects it finds are found in the right
 part of the model with the fit improving on held-out data.
 
 The full benchmark (every effect ID, 30 s recordings) is
-benchmarks/diagnosis_suite.py; its table, including the effects not yet
-found, is in the README."""
+benchmarks/diagnosis_suite.py; its table, including the two effects it
+does not name (absorbed by a look-alike's calibration), is in the README."""
 import pytest
 
 from hdjoint.cases import CASES, nominal_for, record
@@ -14,9 +14,9 @@ from hdjoint.effects import EFFECTS
 DURATION = 20.0
 
 
-def _run(name_start):
+def _run(name_start, duration=DURATION):
     case = next(c for c in CASES if c.name.startswith(name_start))
-    return case, diagnose(record(case, DURATION), nominal_for(case))[1]
+    return case, diagnose(record(case, duration), nominal_for(case))[1]
 
 
 @pytest.mark.parametrize("name", ["control A", "control B"])
@@ -25,14 +25,22 @@ def test_controls_are_consistent(name):
     assert doc["verdict"] == "consistent" and doc["findings"] == [] and doc["unexplained"] == []
 
 
-@pytest.mark.parametrize("name,effect", [
-    ("kinematic error", "kinematic_error"),
-    ("wave generator load", "wave_generator_load"),
-    ("cogging", "cogging"),
-    ("link friction", "link_friction"),
+@pytest.mark.parametrize("name,effect,duration", [
+    ("kinematic error", "kinematic_error", DURATION),
+    ("wave generator load", "wave_generator_load", DURATION),
+    ("cogging", "cogging", DURATION),
+    ("link friction", "link_friction", DURATION),
+    ("backlash", "backlash", DURATION),
+    ("viscous friction", "viscous_friction", DURATION),
+    ("thermal drift", "thermal_drift", DURATION),
+    # These three need the benchmark's 30 s: at 20 s their held-out gain
+    # is not yet significant fold by fold (the verdict is then consistent).
+    ("hysteresis", "hysteresis", 30.0),
+    ("Stribeck friction", "stribeck_friction", 30.0),
+    ("time delay", "time_delay", 30.0),
 ])
-def test_effect_is_named_located_and_improves_held_out_fit(name, effect):
-    case, doc = _run(name)
+def test_effect_is_named_located_and_improves_held_out_fit(name, effect, duration):
+    case, doc = _run(name, duration)
     assert doc["verdict"] == "missing_physics"
     first = doc["findings"][0]
     assert first["effect"] == effect
