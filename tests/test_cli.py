@@ -20,7 +20,7 @@ from hdjoint.fmu_runner import run_estimator_fmu
 from hdjoint.fmus import FMU_NAMES, fmu_path
 from hdjoint.recording import read_recording
 
-ESTIMATE_COLUMNS = ["time", "tau_ukf", "tau_compliance", "omega_m", "dtheta_f", "tau_ukf_std"]
+ESTIMATE_COLUMNS = ["time", "tau_ukf", "tau_compliance", "omega_m", "dtheta_f", "tau_ukf_std", "tau_hat", "tau_hat_std"]
 
 
 def read_csv(path):
