@@ -51,7 +51,7 @@ bool JointSystemModel::derivative(const State& x, const Control& u, State* dx, J
     const double NJm = q.N * q.Jm;
     const double a_l = (T.tau - q.jsf_Bl * omega_l - q.jsf_mgl * std::sin(theta_l) - w) / q.jsf_Jl;
     const double a_m = (motor_torque(u.i_m, theta_m, q) - motor_friction(omega_m, q, scale) - T.tau / q.N) / NJm;
-    *dx << omega_l, a_l, nu, a_m - a_l, 0.0;
+    *dx << omega_l, a_l, nu, a_m - a_l, x(5), 0.0;
 
     const double cog = cogging_on(q) ? cogging_slope(theta_m, q) : 0.0;  // d/d theta_m
     const double friction = coulomb_friction_slope(omega_m, q, scale) + q.Bm;  // d/d omega_m
@@ -70,6 +70,7 @@ bool JointSystemModel::derivative(const State& x, const Control& u, State* dx, J
     (*J)(3, 2) = am_delta - (*J)(1, 2);
     (*J)(3, 3) = am_speed;
     (*J)(3, 4) = -(*J)(1, 4);
+    (*J)(4, 5) = 1.0;
     return dx->allFinite() && J->allFinite();
 }
 
@@ -96,9 +97,10 @@ JointStateFilter::JointStateFilter(const Parameters& p) : p_(p) {
     const double torque_std = std::hypot(p.Kt * p.jsf_current_noise, p.jsf_q_motor);
     const double a = torque_std / (p.N * p.Jm);
     JointState G;
-    G << 0.0, 0.0, 0.5 * p.Ts * p.Ts, p.Ts, 0.0;
+    G << 0.0, 0.0, 0.5 * p.Ts * p.Ts, p.Ts, 0.0, 0.0;
     Q_ = (a * a) * (G * G.transpose());
     Q_(4, 4) = p.jsf_q_load * p.jsf_q_load;
+    Q_(5, 5) = p.jsf_q_load_rate * p.jsf_q_load_rate;
     // Floor quantisers: reading + q/2 is unbiased, variance q^2/12.
     const double qm = resolution(p.jsf_motor_counts), ql = resolution(p.jsf_link_counts);
     offset_m_ = 0.5 * qm;
@@ -108,7 +110,7 @@ JointStateFilter::JointStateFilter(const Parameters& p) : p_(p) {
     R_(1, 1) = std::max(p.jsf_r_theta_l * p.jsf_r_theta_l + ql * ql / 12.0, kMinReadingVariance);
     JointCovariance P0 = JointCovariance::Zero();
     P0.diagonal() << kP0Angle * kP0Angle, kP0Speed * kP0Speed, kP0Torsion * kP0Torsion, kP0Speed * kP0Speed,
-        p.jsf_p0_load * p.jsf_p0_load;
+        p.jsf_p0_load * p.jsf_p0_load, p.jsf_p0_load * p.jsf_p0_load;  // load rate: jsf_p0_load per second
     ukf_ = UnscentedKalmanFilter<kJointStates>(merwe_weights<kJointStates>(1.0, 2.0, 0.0), JointState::Zero(), P0);
 }
 

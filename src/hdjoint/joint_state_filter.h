@@ -3,13 +3,16 @@
 // filter on the raw encoder angles, driven by the motor current, and an
 // offline Rauch-Tung-Striebel smoother over it.
 //
-// State x = [theta_l, omega_l, delta, nu, w] (link-side units):
+// State x = [theta_l, omega_l, delta, nu, w, r] (link-side units):
 //   theta_l, omega_l  link angle and speed,
 //   delta = theta_m/N - theta_l   total torsion (its own state: theta_m/N and
 //                                 theta_l are almost perfectly correlated),
 //   nu = d(delta)/dt              torsion rate (omega_m = N*(omega_l + nu)),
 //   w                             link load: whatever else acts on the link
-//                                 (external torque, Jl/Bl/mgl errors), a random walk.
+//                                 (external torque, Jl/Bl/mgl errors), a random walk
+//                                 plus its rate r (an integrated random walk: loads
+//                                 that ramp, such as contacts, are followed without lag).
+//   d(w)/dt = r, d(r)/dt = noise
 // Dynamics, with tau(x) the transmitted torque of the corrected compliance
 // chain (eq. 3-8 with kinematic error, wave generator, backlash, the
 // hysteresis torque z of the compliance model):
@@ -18,7 +21,7 @@
 // discretised by the linearly implicit trapezoidal rule (A-stable, keeps the
 // undamped torsional resonance undamped; F = (I - h/2 J)^-1 (I + h/2 J)).
 // Process noise: the current noise (and an unmodelled motor torque) as a
-// piecewise-constant acceleration on nu, a random walk on w.
+// piecewise-constant acceleration on nu, random walks on w and r.
 // Measurements: theta_m = N*(theta_l + delta) and theta_l, read by floor
 // quantisers: the reading plus q/2 is unbiased with variance q^2/12.
 // Output: tau(x) and its standard deviation from P.
@@ -30,7 +33,7 @@
 
 namespace hdjoint {
 
-constexpr int kJointStates = 5;
+constexpr int kJointStates = 6;
 using JointState = Vector<kJointStates>;
 using JointCovariance = Matrix<kJointStates>;
 
@@ -121,8 +124,8 @@ public:
     const JointCovariance& covariance() const { return ukf_.covariance(); }
     bool started() const { return started_; }
 
-    // Flat state: 1 + 5 + 25 + 3 + 4 values.
-    static constexpr std::size_t kSavedSize = 38;
+    // Flat state: 1 + 6 + 36 + 3 + 4 values.
+    static constexpr std::size_t kSavedSize = 50;
     void save(std::vector<double>* out) const;
     bool load(const std::vector<double>& in, std::size_t* cursor);
 
