@@ -14,8 +14,8 @@ transmitted torque, wg_load = 1), a link model that is a few percent off
 
 Tuning, the same for both filters: a grid search over their noise settings
 (`hdjoint.tuning`) on a separate tuning recording per encoder set (two sines
-at 0.2 and 0.7 Hz, other payload steps, other noise seed; not a test
-recording), against its torque sensor. The compliance model has nothing to tune.
+at 0.2 and 0.7 Hz, other payload steps and contact pushes, other noise seed;
+not a test recording), against its torque sensor. The compliance model has nothing to tune.
 
 Run: python benchmarks/joint_filter_cases.py [--quick]
 """
@@ -93,7 +93,8 @@ def _tuning_reference(t):
 def tuning_recording(encoders: str, duration: float):
     experiments.EXPERIMENTS.setdefault("tuning", experiments.Experiment(
         "tuning", 20.0, _tuning_reference, "two sines (0.2, 0.7 Hz): the benchmark's tuning run"))
-    load = lambda t: experiments.payload_steps(t, levels=(0.0, -1.5, 2.0, 1.0), hold=5.0)
+    load = lambda t: (experiments.payload_steps(t, levels=(0.0, -1.5, 2.0, 1.0), hold=5.0)
+                      + experiments.contact_pushes(t, every=2.9, width=0.6, peak=2.0))
     return experiments.run("tuning", joint=joint_parameters(encoders, False), nominal=parameters.defaults(),
                            duration=duration, sensors=experiments.Sensors(seed=99), tau_ext=load)
 

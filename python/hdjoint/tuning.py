@@ -24,7 +24,7 @@ from .parameters import for_estimator
 # Settings searched for the joint-state filter (tau_hat) and for the paper's UKF (tau_ukf).
 JOINT_FILTER_GRID = {
     "jsf_q_load": (0.001, 0.003, 0.01, 0.03),
-    "jsf_q_load_rate": (0.1, 0.3, 1.0, 3.0),
+    "jsf_q_load_rate": (0.0, 0.1, 0.3, 1.0, 3.0),
     "jsf_q_motor": (0.0, 0.001, 0.003),
 }
 PAPER_UKF_GRID = {
