@@ -65,6 +65,17 @@ struct JointSystemModel {
 
     // Continuous dynamics dx/dt and its Jacobian J (false: singular torsion).
     bool derivative(const State& x, const Control& u, State* dx, JointCovariance* J) const;
+    // joint_state_torque, remembering the last point: the filter's output at
+    // a posterior is where the next prediction starts (same state, same input).
+    JointTorque torque(const State& x, const Control& u) const;
+
+private:
+    mutable bool cached_ = false;
+    mutable State cached_x_ = State::Zero();
+    mutable Control cached_u_;
+    mutable JointTorque cached_torque_;
+
+public:
     State step(const State& x, const Control& u, JointCovariance* F) const;
     State f(const State& x, const Control& u) const {
         JointCovariance F;
