@@ -1,5 +1,6 @@
 """Speed figures for the README (printed, not asserted):
-  - ns per estimator step (compliance model + paper UKF) timed inside C++,
+  - ns per estimator step (compliance model + paper UKF + joint-state filter)
+    and per joint-state filter step alone, timed inside C++; the smoother's cost per sample,
   - us per step through JointTorqueEstimator.fmu driven by fmpy,
   - seconds for `hdjoint estimate` on the 58 s paper recording (FMU and batch),
   - seconds for the batch path over the same recording.
@@ -37,7 +38,23 @@ def main():
 
     n = 2_000_000
     seconds = min(_core.time_estimator(params, n) for _ in range(3))
-    print(f"C++ estimator step (compliance + UKF):  {seconds / n * 1e9:8.1f} ns/step")
+    print(f"C++ estimator step (compliance + UKF + joint-state filter): {seconds / n * 1e9:8.1f} ns/step")
+    joint_s = min(_core.time_joint_filter(params, n) for _ in range(3))
+    print(f"C++ joint-state filter step alone (tau_hat):  {joint_s / n * 1e9:8.1f} ns/step")
+    # On a shared machine wall time includes waiting for a core: also the thread's CPU time.
+    for label, fn in (("estimator", _core.time_estimator), ("joint-state filter", _core.time_joint_filter)):
+        cpu = []
+        for _ in range(3):
+            c0 = time.thread_time()
+            fn(params, n)
+            cpu.append(time.thread_time() - c0)
+        print(f"  CPU time per step, {label}: {min(cpu) / n * 1e9:8.1f} ns (load average {os.getloadavg()[0]:.1f})")
+    rec_short = experiments.run("paper", duration=20.0)
+    smooth_s = best_of(lambda: _core.run_estimator(params, rec_short.time, rec_short.i_m, rec_short.theta_m,
+                                                   rec_short.theta_l, smooth=True), 3)
+    plain_s = best_of(lambda: _core.run_estimator(params, rec_short.time, rec_short.i_m, rec_short.theta_m,
+                                                  rec_short.theta_l), 3)
+    print(f"RTS smoother on top (batch, 20 s):      {(smooth_s - plain_s) / len(rec_short) * 1e9:8.1f} ns/sample")
 
     rec = experiments.run("paper")
     steps = len(rec)

@@ -15,6 +15,7 @@ namespace {
 enum : unsigned {
     kIm = 100, kThetaM, kThetaL,
     kTauUkf = 200, kTauCompliance, kOmegaM, kDthetaF, kTauUkfStd,
+    kTauHat = 205, kTauHatStd,
 };
 
 class EstimatorModel final : public Model {
@@ -30,6 +31,8 @@ public:
             case kOmegaM: return out_.omega_m;
             case kDthetaF: return out_.dtheta_f;
             case kTauUkfStd: return out_.tau_ukf_std;
+            case kTauHat: return out_.tau_hat;
+            case kTauHatStd: return out_.tau_hat_std;
         }
         return 0.0;
     }
@@ -50,7 +53,7 @@ public:
         // Until the first sample, outputs show the compliance model on the start inputs.
         const ComplianceEstimate c = compliance_estimate(in_.i_m, in_.theta_m, in_.theta_l, p_);
         out_ = {};
-        if (c.valid) out_ = {c.tau, c.tau, 0.0, c.dtheta_f, p_.ukf_p0_tau, 0.0};
+        if (c.valid) out_ = {c.tau, c.tau, 0.0, c.dtheta_f, p_.ukf_p0_tau, 0.0, 0.0, c.tau, p_.jsf_p0_load, 0.0};
         return Result::ok();
     }
 
@@ -77,7 +80,7 @@ public:
         append_parameters(p_, &d);
         d.insert(d.end(), {in_.i_m, in_.theta_m, in_.theta_l, start_time_, static_cast<double>(next_sample_),
                            out_.tau_ukf, out_.tau_compliance, out_.omega_m, out_.dtheta_f, out_.tau_ukf_std,
-                           out_.nis, estimator_ ? 1.0 : 0.0});
+                           out_.nis, out_.tau_hat, out_.tau_hat_std, estimator_ ? 1.0 : 0.0});
         if (estimator_) {
             const std::vector<double> e = estimator_->save_state();
             d.insert(d.end(), e.begin(), e.end());
@@ -88,13 +91,13 @@ public:
     bool load(const std::vector<double>& d) override {
         std::size_t k = 0;
         EstimatorModel m;
-        if (!read_parameters(d, &k, &m.p_) || d.size() < k + 12) return false;
+        if (!read_parameters(d, &k, &m.p_) || d.size() < k + 14) return false;
         m.in_ = {d[k], d[k + 1], d[k + 2]};
         m.start_time_ = d[k + 3];
         m.next_sample_ = static_cast<long>(d[k + 4]);
-        m.out_ = {d[k + 5], d[k + 6], d[k + 7], d[k + 8], d[k + 9], d[k + 10]};
-        const bool has_estimator = d[k + 11] != 0.0;
-        k += 12;
+        m.out_ = {d[k + 5], d[k + 6], d[k + 7], d[k + 8], d[k + 9], d[k + 10], 0.0, d[k + 11], d[k + 12], 0.0};
+        const bool has_estimator = d[k + 13] != 0.0;
+        k += 14;
         if (has_estimator) {
             m.estimator_.emplace(m.p_);
             if (!m.estimator_->load_state(std::vector<double>(d.begin() + static_cast<long>(k), d.end()))) return false;
@@ -121,7 +124,7 @@ ModelInfo make_info() {
     info.description =
         "Joint torque of a harmonic-drive joint from motor current and motor/link encoder angles: the compliance "
         "model (Yu et al. 2018, eq. 3-8) and the paper's Unscented Kalman Filter (eq. 9-31), at a fixed sample "
-        "period Ts.";
+        "period Ts; and beyond the paper, the joint-state filter's estimate tau_hat.";
     info.variables = parameter_variables(true, false);
     const double inf = 1e300;
     info.variables.push_back({"i_m", kIm, Causality::Input, "A", "motor current", 0.0, -inf, inf});
@@ -132,6 +135,8 @@ ModelInfo make_info() {
     info.variables.push_back({"omega_m", kOmegaM, Causality::Output, "rad/s", "UKF motor-speed estimate", 0.0});
     info.variables.push_back({"dtheta_f", kDthetaF, Causality::Output, "rad", "flexspline torsion, eq. (4)", 0.0});
     info.variables.push_back({"tau_ukf_std", kTauUkfStd, Causality::Output, "N.m", "standard deviation of tau_ukf from the UKF covariance", 0.0});
+    info.variables.push_back({"tau_hat", kTauHat, Causality::Output, "N.m", "best causal joint-torque estimate: the joint-state filter (two-mass Kalman filter on the raw encoder angles, driven by the current; beyond the paper)", 0.0});
+    info.variables.push_back({"tau_hat_std", kTauHatStd, Causality::Output, "N.m", "standard deviation of tau_hat from the joint-state filter's covariance", 0.0});
     info.create = [] { return std::unique_ptr<Model>(new EstimatorModel()); };
     return info;
 }

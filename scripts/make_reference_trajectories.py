@@ -43,7 +43,8 @@ def main():
     cases = {
         "HarmonicDriveJoint": (joint_inputs(), ["theta_m", "theta_l", "tau_joint", "omega_m", "omega_link"]),
         "JointTorqueEstimator": (estimator_inputs(),
-                                 ["tau_ukf", "tau_compliance", "omega_m", "dtheta_f", "tau_ukf_std"]),
+                                 ["tau_ukf", "tau_compliance", "omega_m", "dtheta_f", "tau_ukf_std", "tau_hat",
+                                  "tau_hat_std"]),
     }
     for name, (inputs, outputs) in cases.items():
         write_csv(DATA / f"{name}_in.csv", inputs)

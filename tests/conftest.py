@@ -30,7 +30,7 @@ JOINT = "HarmonicDriveJoint"
 FMU_NAMES = (ESTIMATOR, JOINT)
 
 ESTIMATOR_INPUTS = ("i_m", "theta_m", "theta_l")
-ESTIMATOR_OUTPUTS = ("tau_ukf", "tau_compliance", "omega_m", "dtheta_f", "tau_ukf_std")
+ESTIMATOR_OUTPUTS = ("tau_ukf", "tau_compliance", "omega_m", "dtheta_f", "tau_ukf_std", "tau_hat", "tau_hat_std")
 JOINT_INPUTS = ("i_m", "tau_ext")
 JOINT_OUTPUTS = ("theta_m", "theta_l", "tau_joint", "omega_m", "omega_link")
 

@@ -14,13 +14,13 @@ import subprocess
 import numpy as np
 import pytest
 
-from hdjoint import parameters
+from hdjoint import _core, parameters
 from hdjoint.cli import main
 from hdjoint.fmu_runner import run_estimator_fmu
 from hdjoint.fmus import FMU_NAMES, fmu_path
 from hdjoint.recording import read_recording
 
-ESTIMATE_COLUMNS = ["time", "tau_ukf", "tau_compliance", "omega_m", "dtheta_f", "tau_ukf_std"]
+ESTIMATE_COLUMNS = ["time", "tau_ukf", "tau_compliance", "omega_m", "dtheta_f", "tau_ukf_std", "tau_hat", "tau_hat_std"]
 
 
 def read_csv(path):
@@ -189,6 +189,27 @@ def test_batch_engine_writes_the_same_file_layout(estimated):
     h_fmu, _ = read_csv(estimated["fmu"][0])
     h_batch, _ = read_csv(estimated["batch"][0])
     assert h_batch == h_fmu
+
+
+def test_estimate_smooth_adds_tau_smooth_with_either_engine(simulated, tmp_path, capsys, estimator_params):
+    columns = {}
+    for engine in ("fmu", "batch"):
+        out = tmp_path / f"{engine}.csv"
+        code, stdout, err = run_cli(capsys, "estimate", simulated, "--engine", engine, "--smooth", "-o", out)
+        assert code == 0, err
+        header, data = read_csv(out)
+        assert header == ESTIMATE_COLUMNS + ["tau_smooth"]
+        assert re.search(r"^tau_smooth\s+[\d.]+\s+[\d.]+\s*$", stdout, re.MULTILINE), stdout
+        columns[engine] = data
+    # The smoother is the batch path's in both cases: the same numbers.
+    np.testing.assert_array_equal(columns["fmu"][:, -1], columns["batch"][:, -1])
+    rec = read_recording(simulated)
+    expected = _core.run_estimator(estimator_params, rec.time, rec.i_m, rec.theta_m, rec.theta_l, smooth=True)
+    np.testing.assert_array_equal(columns["batch"][:, -1], expected["tau_smooth"])
+    # Smoothing uses the future: it differs from the causal tau_hat. (Whether it is
+    # closer to the truth depends on the model: this joint is not the nominal one.)
+    hat = columns["batch"][:, ESTIMATE_COLUMNS.index("tau_hat")]
+    assert not np.array_equal(hat, columns["batch"][:, -1])
 
 
 def test_estimate_without_tau_sensor_prints_no_error_figures(rec_csv, tmp_path, capsys):

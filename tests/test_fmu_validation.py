@@ -55,6 +55,7 @@ BASE_UNITS = {
     "s": dict(s=1), "N.m/A": dict(kg=1, m=2, s=-2, A=-1), "N.m/rad": dict(kg=1, m=2, s=-2, rad=-1),
     "kg.m2": dict(kg=1, m=2), "N.m.s/rad": dict(kg=1, m=2, s=-1, rad=-1), "1/(N.m)": dict(kg=-1, m=-2, s=2),
     "1/rad": dict(rad=-1), "1": {}, "1/s": dict(s=-1),
+    "N.m/s": dict(kg=1, m=2, s=-3),
 }
 
 

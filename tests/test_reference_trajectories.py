@@ -23,6 +23,7 @@ TOLERANCES = {
     "theta_l": TWO_PI / DEFAULTS["link_counts"] * 1.0001,
     "tau_joint": 1e-6, "omega_m": 1e-6, "omega_link": 1e-6,
     "tau_ukf": 1e-6, "tau_compliance": 1e-6, "dtheta_f": 1e-10, "tau_ukf_std": 1e-9,
+    "tau_hat": 1e-6, "tau_hat_std": 1e-9,
 }
 
 

@@ -16,6 +16,7 @@
 #include "hdjoint/compliance_model.h"
 #include "hdjoint/hysteresis.h"
 #include "hdjoint/joint_plant.h"
+#include "hdjoint/joint_state_filter.h"
 #include "hdjoint/parameters.h"
 #include "hdjoint/torque_estimator.h"
 #include "hdjoint/transmission.h"
@@ -55,14 +56,21 @@ void check_lengths(std::size_t n, std::initializer_list<std::size_t> sizes) {
 // The estimator over a recording, with the FMU's timing: row j is a
 // communication point; its step [t_j, t_j+1) runs the samples start + k*Ts
 // inside it on row j's inputs, and row j's outputs are those after the step
-// (the last row steps by Ts).
+// (the last row steps by Ts). With `smooth`, the joint-state filter's
+// samples are kept and an RTS smoother run backwards over them gives
+// tau_smooth (and tau_smooth_std): row j gets the smoothed torque of the
+// last sample its step ran (the compliance torque before the filter starts).
 std::map<std::string, OutArray> run_estimator(const std::map<std::string, double>& values, Array time, Array i_m,
-                                              Array theta_m, Array theta_l) {
+                                              Array theta_m, Array theta_l, bool smooth) {
     const std::size_t n = time.shape(0);
     check_lengths(n, {i_m.shape(0), theta_m.shape(0), theta_l.shape(0)});
     const Parameters p = parameters_from(values, true, false);
     TorqueEstimator estimator(p);
     std::vector<double> tau_ukf(n), tau_c(n), omega(n), dtheta_f(n), std_ukf(n), nis(n), status(n), z(n);
+    std::vector<double> tau_hat(n), std_hat(n), load(n);
+    std::vector<JointFilterRecord> records;
+    std::vector<long> last_record(n, -1);  // per row: index of the last filter sample its step ran
+    if (smooth) records.reserve(n);
     const double t0 = time(0), tolerance = 1e-6 * p.Ts;
     long next = 0;
     {
@@ -81,7 +89,12 @@ std::map<std::string, OutArray> run_estimator(const std::map<std::string, double
                 }
                 worst = std::max(worst, static_cast<int>(s));
                 ++next;
+                if (smooth && estimator.joint_filter().started() &&
+                    (records.empty() || estimator.joint_filter().record().predicted)) {
+                    records.push_back(estimator.joint_filter().record());
+                }
             }
+            last_record[j] = static_cast<long>(records.size()) - 1;
             const EstimatorOutputs& o = estimator.outputs();
             tau_ukf[j] = o.tau_ukf;
             tau_c[j] = o.tau_compliance;
@@ -90,6 +103,9 @@ std::map<std::string, OutArray> run_estimator(const std::map<std::string, double
             std_ukf[j] = o.tau_ukf_std;
             nis[j] = o.nis;
             z[j] = o.hysteresis_torque;
+            tau_hat[j] = o.tau_hat;
+            std_hat[j] = o.tau_hat_std;
+            load[j] = o.load;
             status[j] = worst;
         }
     }
@@ -102,6 +118,20 @@ std::map<std::string, OutArray> run_estimator(const std::map<std::string, double
     out.emplace("nis", make_array(std::move(nis)));
     out.emplace("status", make_array(std::move(status)));
     out.emplace("hysteresis_torque", make_array(std::move(z)));
+    if (smooth) {
+        const SmoothedTorque sm = smooth_joint_states(records, p);
+        std::vector<double> tau_s(n), std_s(n);
+        for (std::size_t j = 0; j < n; ++j) {
+            const long r = last_record[j];
+            tau_s[j] = r >= 0 ? sm.tau[static_cast<std::size_t>(r)] : tau_hat[j];
+            std_s[j] = r >= 0 ? sm.tau_std[static_cast<std::size_t>(r)] : std_hat[j];
+        }
+        out.emplace("tau_smooth", make_array(std::move(tau_s)));
+        out.emplace("tau_smooth_std", make_array(std::move(std_s)));
+    }
+    out.emplace("tau_hat", make_array(std::move(tau_hat)));
+    out.emplace("tau_hat_std", make_array(std::move(std_hat)));
+    out.emplace("tau_load", make_array(std::move(load)));
     return out;
 }
 
@@ -209,6 +239,26 @@ double time_estimator(const std::map<std::string, double>& values, long n) {
     return std::chrono::duration<double>(stop - start).count();
 }
 
+// Seconds for n samples of the joint-state filter alone (tau_hat), on the
+// same synthetic moving joint, timed in C++.
+double time_joint_filter(const std::map<std::string, double>& values, long n) {
+    const Parameters p = parameters_from(values, true, false);
+    JointStateFilter filter(p);
+    double sink = 0.0;
+    nb::gil_scoped_release release;
+    const auto start = std::chrono::steady_clock::now();
+    for (long k = 0; k < n; ++k) {
+        const double t = static_cast<double>(k) * p.Ts;
+        const double theta_l = 0.5 * std::sin(1.5 * t);
+        const double tau = 3.0 * std::sin(1.5 * t);
+        filter.step(p.N * (theta_l + tau / p.Kf), theta_l, {tau / (p.N * p.Kt), 0.0, t});
+        sink += filter.output().tau;
+    }
+    const auto stop = std::chrono::steady_clock::now();
+    if (!std::isfinite(sink)) throw std::runtime_error("benchmark diverged");
+    return std::chrono::duration<double>(stop - start).count();
+}
+
 nb::list table() {
     nb::list rows;
     for (std::size_t i = 0; i < parameter_count(); ++i) {
@@ -233,7 +283,9 @@ NB_MODULE(_core, m) {
     m.doc() = "hdjoint C++ core: the batch path (same code as the FMUs)";
     m.def("parameter_table", &table, "The parameter table (name, unit, default, range, scope, description).");
     m.def("run_estimator", &run_estimator, nb::arg("params"), nb::arg("time"), nb::arg("i_m"), nb::arg("theta_m"),
-          nb::arg("theta_l"), "Compliance model and paper UKF over a recording, with the FMU's sampling.");
+          nb::arg("theta_l"), nb::arg("smooth") = false,
+          "Compliance model, paper UKF and the joint-state filter (tau_hat, tau_hat_std, tau_load) over a "
+          "recording, with the FMU's sampling; smooth=True adds the RTS smoother's tau_smooth, tau_smooth_std.");
     m.def("compliance", &compliance, nb::arg("params"), nb::arg("i_m"), nb::arg("theta_m"), nb::arg("theta_l"),
           "The estimator's compliance model, eq. (3)-(8) with hysteresis, backlash and the current delay, sample by "
           "sample: tau_compliance, dtheta_f, hysteresis_torque.");
@@ -241,6 +293,8 @@ NB_MODULE(_core, m) {
           "Dahl hysteresis torque over a torsion sequence x (z = 0 at x[0]), the model's exact update.");
     m.def("time_estimator", &time_estimator, nb::arg("params"), nb::arg("samples"),
           "Seconds for `samples` estimator steps timed inside C++ (benchmark).");
+    m.def("time_joint_filter", &time_joint_filter, nb::arg("params"), nb::arg("samples"),
+          "Seconds for `samples` steps of the joint-state filter alone, timed inside C++ (benchmark).");
     m.def("simulate_joint", &simulate_joint, nb::arg("params"), nb::arg("time"), nb::arg("i_m"), nb::arg("tau_ext"),
           "The joint, open loop, with inputs held between rows; besides the FMU's outputs, tau_friction (motor side, "
           "viscous included), tau_cogging, tau_link_friction, z_hysteresis (Dahl + Bouc-Wen torque), "

@@ -80,10 +80,19 @@ def cmd_estimate(args) -> int:
             raise UserError(f"{args.recording}: {e}") from None
         from .fmu_runner import ESTIMATOR_OUTPUTS
         est = {name: est[name] for name in ESTIMATOR_OUTPUTS}  # the FMU engine's columns, in its order
+    if args.smooth:
+        # The smoother runs offline over the joint-state filter's samples, in
+        # the batch path, whichever engine computed the causal estimates.
+        from . import _core
+        try:
+            est["tau_smooth"] = _core.run_estimator(params, rec.time, rec.i_m, rec.theta_m, rec.theta_l,
+                                                    smooth=True)["tau_smooth"]
+        except RuntimeError as e:
+            raise UserError(f"{args.recording}: {e}") from None
     write_csv(args.output, {"time": rec.time, **est})
     if rec.tau_sensor is not None:
         print(f"{'estimate':<16} {'RMS error':>10} {'max error':>10}   (N.m, against tau_sensor)")
-        for name in ("tau_compliance", "tau_ukf"):
+        for name in ("tau_compliance", "tau_ukf", "tau_hat") + (("tau_smooth",) if args.smooth else ()):
             fig = error_figures(est[name], rec.tau_sensor)
             print(f"{name:<16} {fig.rms:>10.4f} {fig.max:>10.4f}")
     return 0
@@ -161,6 +170,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--params", help="parameter set (JSON)")
     p.add_argument("--engine", choices=("fmu", "batch"), default="fmu",
                    help="run JointTorqueEstimator.fmu through fmpy (default) or the native batch path")
+    p.add_argument("--smooth", action="store_true",
+                   help="add tau_smooth: the RTS smoother over the joint-state filter (offline; always computed "
+                        "by the native batch path, also with --engine fmu)")
     p.add_argument("-o", "--output", required=True, help="estimates to write (CSV)")
     p.set_defaults(run=cmd_estimate)
 

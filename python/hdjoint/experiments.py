@@ -90,6 +90,53 @@ def _repeated_paper_reference(t):
     return _paper_reference(np.mod(t, 58.0))
 
 
+def _multisine_reference(t):
+    # Five incommensurate sines, 0.13-2.9 Hz: broadband torque and speed
+    # reversals at many levels.
+    theta = np.zeros_like(t)
+    omega = np.zeros_like(t)
+    for amplitude, hz, phase in ((0.6, 0.13, 0.0), (0.25, 0.41, 1.0), (0.08, 1.07, 2.0), (0.03, 1.9, 0.5),
+                                 (0.012, 2.9, 2.5)):
+        w = 2.0 * math.pi * hz
+        theta += amplitude * np.sin(w * t + phase)
+        omega += amplitude * w * np.cos(w * t + phase)
+    return theta - 0.6 * math.sin(0.0) - 0.25 * math.sin(1.0) - 0.08 * math.sin(2.0) - 0.03 * math.sin(0.5) \
+        - 0.012 * math.sin(2.5), omega
+
+
+def _smooth_ramp(x):
+    """0 -> 1 over x in [0, 1] with zero slope at both ends (and its derivative)."""
+    x = np.clip(x, 0.0, 1.0)
+    return x * x * (3.0 - 2.0 * x), 6.0 * x * (1.0 - x)
+
+
+def _sweep_reference(t):
+    # Slow moves between link angles with dwells: 2 s move, 2 s dwell.
+    targets = np.array([0.0, 0.8, -0.5, 1.1, 0.2, -0.9, 0.6, 0.0])
+    period, move = 4.0, 2.0
+    k = np.minimum((t // period).astype(int), len(targets) - 2)
+    ramp, slope = _smooth_ramp((t - k * period) / move)
+    theta = targets[k] + (targets[k + 1] - targets[k]) * ramp
+    omega = (targets[k + 1] - targets[k]) * slope / move
+    return theta, omega
+
+
+def _chirp_reference(t):
+    # Linear chirp 0.1 -> 4 Hz over 30 s, amplitude falling as the frequency
+    # rises (constant acceleration level), faded in over 1 s.
+    f0, f1, T = 0.1, 4.0, 30.0
+    phase = 2.0 * math.pi * (f0 * t + 0.5 * (f1 - f0) / T * t * t)
+    freq = f0 + (f1 - f0) * t / T
+    amplitude = 0.5 * (f0 + 0.2) / (freq + 0.2)
+    fade, dfade = _smooth_ramp(t / 1.0)
+    theta = fade * amplitude * np.sin(phase)
+    # d/dt of amplitude*sin(phase), amplitude' small but kept.
+    damp = -0.5 * (f0 + 0.2) * (f1 - f0) / T / (freq + 0.2) ** 2
+    omega = fade * (amplitude * 2.0 * math.pi * freq * np.cos(phase) + damp * np.sin(phase)) \
+        + dfade * amplitude * np.sin(phase)
+    return theta, omega
+
+
 EXPERIMENTS = {
     "paper": Experiment(
         "paper", 58.0, _paper_reference,
@@ -98,16 +145,45 @@ EXPERIMENTS = {
     "paper_repeated": Experiment(
         "paper_repeated", 3600.0, _repeated_paper_reference,
         "the paper experiment repeated for an hour (58 s cycles): a long recording for the diagnosis' speed"),
+    "multisine": Experiment(
+        "multisine", 30.0, _multisine_reference,
+        "30 s multisine (five incommensurate sines, 0.13-2.9 Hz) on the link angle"),
+    "sweep": Experiment(
+        "sweep", 30.0, _sweep_reference,
+        "30 s of slow point-to-point moves (2 s) with 2 s dwells between them"),
+    "chirp": Experiment(
+        "chirp", 30.0, _chirp_reference,
+        "30 s linear chirp 0.1 -> 4 Hz, amplitude falling with frequency"),
 }
+
+
+def payload_steps(t, levels=(0.0, 1.5, -1.0, 2.5, 0.5), hold=6.0, rise=0.05):
+    """External link torque: a payload changing every `hold` seconds (steps with a short rise)."""
+    t = np.asarray(t, float)
+    k = np.minimum((t // hold).astype(int), len(levels) - 1)
+    previous = np.array(levels)[np.maximum(k - 1, 0)]
+    ramp, _ = _smooth_ramp((t - k * hold) / rise)
+    return previous + (np.array(levels)[k] - previous) * ramp
+
+
+def contact_pushes(t, every=3.7, width=0.8, peak=3.0):
+    """External link torque: contact pushes (raised-cosine pulses) of alternating sign."""
+    t = np.asarray(t, float)
+    k = np.floor(t / every)
+    x = (t - k * every) / width
+    pulse = np.where(x < 1.0, 0.5 * (1.0 - np.cos(2.0 * math.pi * np.clip(x, 0.0, 1.0))), 0.0)
+    return peak * pulse * np.where(k % 2 == 0, 1.0, -0.6)
 
 
 def run(name: str = "paper", joint: dict[str, float] | None = None, nominal: dict[str, float] | None = None,
         sample_time: float = 1e-3, sensors: Sensors | None = None, controller: Controller | None = None,
-        duration: float | None = None) -> Recording:
+        duration: float | None = None, tau_ext: Callable[[np.ndarray], np.ndarray] | None = None) -> Recording:
     """Simulate a built-in experiment; returns the recording.
 
     `joint` is the simulated joint's parameter set (default: the nominal set
-    with TRUE_JOINT_DEVIATIONS); `nominal` what the controller assumes.
+    with TRUE_JOINT_DEVIATIONS); `nominal` what the controller assumes;
+    `tau_ext` an external link torque profile t -> N.m (default: the
+    experiment's, none), unknown to the controller.
     The recording holds the contract columns plus `tau_joint` (the true
     transmitted torque) and `i_cmd` (the current actually applied).
     """
@@ -121,7 +197,7 @@ def run(name: str = "paper", joint: dict[str, float] | None = None, nominal: dic
     n = int(round((duration or exp.duration) / sample_time)) + 1
     t = np.arange(n) * sample_time
     theta_ref, omega_ref = exp.reference(t)
-    tau_ext = exp.tau_ext(t)
+    tau_ext = (tau_ext or exp.tau_ext)(t)
     N, Kt, mgl = nominal["N"], nominal["Kt"], joint_gravity_guess(nominal)
 
     out = np.empty((n, 3))

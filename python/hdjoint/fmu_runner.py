@@ -21,7 +21,7 @@ from fmpy import calloc, free
 
 from .fmus import fmu_path
 
-ESTIMATOR_OUTPUTS = ("tau_ukf", "tau_compliance", "omega_m", "dtheta_f", "tau_ukf_std")
+ESTIMATOR_OUTPUTS = ("tau_ukf", "tau_compliance", "omega_m", "dtheta_f", "tau_ukf_std", "tau_hat", "tau_hat_std")
 _STATUS = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING"]
 
 

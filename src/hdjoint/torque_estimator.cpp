@@ -9,7 +9,7 @@
 namespace hdjoint {
 
 namespace {
-constexpr double kStateVersion = 2.0;
+constexpr double kStateVersion = 3.0;
 
 std::string describe_input(const EstimatorInputs& in) {
     std::ostringstream s;
@@ -22,7 +22,7 @@ std::string describe_input(const EstimatorInputs& in) {
 }  // namespace
 
 TorqueEstimator::TorqueEstimator(const Parameters& p)
-    : p_(p), system_(p, p.Ts), measurement_(p), compliance_(p) {
+    : p_(p), system_(p, p.Ts), measurement_(p), compliance_(p), joint_(p) {
     Q_.diagonal() << p.ukf_q_omega * p.ukf_q_omega, p.ukf_q_tau * p.ukf_q_tau;
     R_.diagonal() << p.ukf_r_omega * p.ukf_r_omega, p.ukf_r_torsion * p.ukf_r_torsion;
     Matrix<2> P0 = Matrix<2>::Zero();
@@ -52,7 +52,7 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
     if (!c.ready) {
         // The delay line is filling: no angles yet for this current. Show the
         // compliance model on the first angles; the filter waits.
-        out_ = {c.tau, c.tau, 0.0, c.dtheta_f, p_.ukf_p0_tau, 0.0, 0.0};
+        out_ = {c.tau, c.tau, 0.0, c.dtheta_f, p_.ukf_p0_tau, 0.0, 0.0, c.tau, p_.jsf_p0_load, 0.0};
         return EstimatorStatus::Ok;
     }
 
@@ -78,13 +78,18 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
     out_.nis = update.nis;
     out_.hysteresis_torque = c.z;
     previous_theta_m_ = c.theta_m;
-    // eq. (2)'s input, with cogging, Stribeck friction and the drift when they are on.
+    // The joint-state filter on the same (delayed) angles, current and hysteresis torque.
     const double t = static_cast<double>(samples_) * p_.Ts;
+    const FilterStatus joint = joint_.step(c.theta_m, c.theta_l, {in.i_m, c.z, t});
+    out_.tau_hat = joint_.output().tau;
+    out_.tau_hat_std = joint_.output().tau_std;
+    out_.load = joint_.output().load;
+    // eq. (2)'s input, with cogging, Stribeck friction and the drift when they are on.
     previous_u_ = motor_torque(in.i_m, c.theta_m, p_) - coulomb_friction(x(0), p_, friction_drift_scale(t, p_));
     ++samples_;
 
     // Report the worst thing the filter had to do on this sample.
-    const FilterStatus worst = std::max(predicted, update.status);
+    const FilterStatus worst = std::max(std::max(predicted, update.status), joint);
     switch (worst) {
         case FilterStatus::Ok: return EstimatorStatus::Ok;
         case FilterStatus::CovarianceRepaired:
@@ -101,7 +106,8 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
 }
 
 // [version, UKF state (2) and covariance (4), outputs (7), previous theta_m,
-//  previous u, samples, compliance model state]
+//  previous u, samples, hysteresis torque, compliance model state, joint-state
+//  filter state, tau_hat outputs (3)]
 std::vector<double> TorqueEstimator::save_state() const {
     const Vector<2>& x = ukf_.state();
     const Matrix<2>& P = ukf_.covariance();
@@ -110,21 +116,26 @@ std::vector<double> TorqueEstimator::save_state() const {
                              out_.nis, previous_theta_m_, previous_u_, static_cast<double>(samples_),
                              out_.hysteresis_torque};
     compliance_.save(&d);
+    joint_.save(&d);
+    d.insert(d.end(), {out_.tau_hat, out_.tau_hat_std, out_.load});
     return d;
 }
 
 bool TorqueEstimator::load_state(const std::vector<double>& d) {
     std::size_t cursor = 17;
     ComplianceModel compliance = compliance_;
-    if (d.size() < cursor || d[0] != kStateVersion || !compliance.load(d, &cursor) || cursor != d.size())
+    JointStateFilter joint = joint_;
+    if (d.size() < cursor || d[0] != kStateVersion || !compliance.load(d, &cursor) || !joint.load(d, &cursor) ||
+        cursor + 3 != d.size())
         return false;
     ukf_.state() << d[1], d[2];
     ukf_.covariance() << d[3], d[4], d[5], d[6];
-    out_ = {d[7], d[8], d[9], d[10], d[11], d[12], d[16]};
+    out_ = {d[7], d[8], d[9], d[10], d[11], d[12], d[16], d[cursor], d[cursor + 1], d[cursor + 2]};
     previous_theta_m_ = d[13];
     previous_u_ = d[14];
     samples_ = static_cast<long>(d[15]);
     compliance_ = compliance;
+    joint_ = joint;
     return true;
 }
 

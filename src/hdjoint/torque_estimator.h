@@ -1,11 +1,12 @@
 #pragma once
 // The paper's torque estimator: the compliance model of eq. (3)-(8) and the
 // UKF of eq. (9)-(31), run at a fixed sample period on encoder angles and
-// motor current.
+// motor current; beside them the joint-state filter (tau_hat, beyond the paper).
 #include <string>
 #include <vector>
 
 #include "compliance_model.h"
+#include "joint_state_filter.h"
 #include "paper_ukf_models.h"
 #include "parameters.h"
 #include "ukf.h"
@@ -26,6 +27,9 @@ struct EstimatorOutputs {
     double tau_ukf_std = 0.0;     // N.m
     double nis = 0.0;             // normalised innovation squared of the last update
     double hysteresis_torque = 0.0;  // Dahl hysteresis torque inside tau_compliance, N.m (0 when off)
+    double tau_hat = 0.0;         // joint-state filter torque, N.m (beyond the paper)
+    double tau_hat_std = 0.0;     // its standard deviation, N.m
+    double load = 0.0;            // the filter's link-load state w, N.m
 };
 
 enum class EstimatorStatus {
@@ -60,6 +64,9 @@ public:
     std::vector<double> save_state() const;
     bool load_state(const std::vector<double>& data);
 
+    // The joint-state filter (tau_hat): its last sample, for the smoother.
+    const JointStateFilter& joint_filter() const { return joint_; }
+
 private:
     Parameters p_;
     PaperSystemModel system_;
@@ -68,6 +75,7 @@ private:
     Matrix<2> R_ = Matrix<2>::Zero();
     UnscentedKalmanFilter<2> ukf_;
     ComplianceModel compliance_;
+    JointStateFilter joint_;
     EstimatorOutputs out_;
     double previous_theta_m_ = 0.0;
     double previous_u_ = 0.0;  // Kt*i_m - tau_fm of the previous sample

@@ -38,8 +38,26 @@ public:
     // a transition() matrix) is propagated exactly as F P F^T + Q: for a
     // linear f that is what the unscented transform computes, without
     // 2n+1 model evaluations.
+    //
+    // A system model that declares kExtended (a near-linear model with an
+    // analytic Jacobian: step(x, u, &F) gives the next state and the
+    // transition Jacobian at x) is propagated as F P F^T + Q, the extended
+    // filter's prediction; transition() then returns that F (an RTS
+    // smoother needs it).
     template <class System>
     FilterStatus predict(const System& system, const typename System::Control& u, const Covariance& Q) {
+        if constexpr (is_extended<System>()) {
+            FilterStatus status = FilterStatus::Ok;
+            if (!P_.allFinite() || !x_.allFinite()) {
+                P_ = P0_;
+                if (!x_.allFinite()) x_.setZero();
+                status = FilterStatus::CovarianceReset;
+            }
+            x_ = system.step(x_, u, &F_);
+            P_ = F_ * P_ * F_.transpose() + Q;
+            symmetrize(&P_);
+            return status;
+        }
         if constexpr (is_linear<System>()) {
             FilterStatus status = FilterStatus::Ok;
             if (!P_.allFinite() || !x_.allFinite()) {
@@ -72,12 +90,41 @@ public:
         double nis = 0.0;
     };
 
-    // eq. (22)-(31).
+    // eq. (22)-(31). A measurement model that declares itself linear
+    // (kLinear and a jacobian() matrix H) is updated exactly, with
+    // Pzz = H P H^T + R and Pxz = P H^T: for a linear h that is what the
+    // unscented transform computes, without drawing sigma points.
     template <class Measurement>
     Update<Measurement::kSize> update(const Measurement& model, const typename Measurement::Vector& z,
                         const typename Measurement::Covariance& R) {
         constexpr int NZ = Measurement::kSize;
         Update<NZ> result;
+        if constexpr (is_linear<Measurement>()) {
+            if (!P_.allFinite() || !x_.allFinite()) {
+                P_ = P0_;
+                if (!x_.allFinite()) x_.setZero();
+                result.status = FilterStatus::CovarianceReset;
+            }
+            const Eigen::Matrix<double, NZ, NX> H = model.jacobian();
+            const Eigen::Matrix<double, NX, NZ> Pxz = P_ * H.transpose();
+            Matrix<NZ> Pzz = H * Pxz + R;
+            symmetrize(&Pzz);
+            result.innovation = z - model.h(x_);
+            result.innovation_covariance = Pzz;
+            SpdSolver<NZ> solver;
+            if (!solver.compute(Pzz) || !result.innovation.allFinite()) {
+                result.status = FilterStatus::UpdateSkipped;
+                return result;
+            }
+            const Eigen::Matrix<double, NX, NZ> K =
+                solver.solve(Eigen::Matrix<double, NZ, NX>(Pxz.transpose())).transpose();
+            x_ += K * result.innovation;
+            // Joseph-free form; symmetrised. K Pzz K^T = K Pxz^T.
+            P_ -= K * Pxz.transpose();
+            symmetrize(&P_);
+            result.nis = result.innovation.dot(solver.solve(result.innovation));
+            return result;
+        }
         SigmaPoints<NX> chi;
         result.status = draw(&chi);
         Eigen::Matrix<double, NZ, 2 * NX + 1> zeta;
@@ -105,7 +152,20 @@ public:
         return result;
     }
 
+    // The transition Jacobian of the last extended prediction.
+    const Covariance& transition() const { return F_; }
+
 private:
+    template <class System>
+    static constexpr bool is_extended() {
+        if constexpr (requires_extended_flag<System>(0)) return System::kExtended;
+        return false;
+    }
+    template <class System>
+    static constexpr auto requires_extended_flag(int) -> decltype(System::kExtended, bool()) { return true; }
+    template <class System>
+    static constexpr bool requires_extended_flag(...) { return false; }
+
     template <class System>
     static constexpr bool is_linear() {
         if constexpr (requires_linear_flag<System>(0)) return System::kLinear;
@@ -139,6 +199,7 @@ private:
     State x_ = State::Zero();
     Covariance P_ = Covariance::Identity();
     Covariance P0_ = Covariance::Identity();
+    Covariance F_ = Covariance::Identity();
 };
 
 }  // namespace hdjoint

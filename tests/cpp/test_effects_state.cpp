@@ -79,7 +79,8 @@ TEST(EffectsState, EstimatorRestoresExactly) {
         TorqueEstimator a(p);
         for (int k = 0; k < split; ++k) ASSERT_TRUE(recoverable(a.step(inputs[k])));
         const std::vector<double> saved = a.save_state();
-        EXPECT_EQ(saved.size(), 17u + 4u + 2u * 3u);
+        // estimator, compliance model with a 3-sample delay line, joint-state filter, tau_hat outputs
+        EXPECT_EQ(saved.size(), 17u + 4u + 2u * 3u + JointStateFilter::kSavedSize + 3u);
         for (int k = split; k < 1000; ++k) ASSERT_TRUE(recoverable(a.step(inputs[k])));
         TorqueEstimator b(p);
         ASSERT_TRUE(b.load_state(saved));
@@ -87,6 +88,7 @@ TEST(EffectsState, EstimatorRestoresExactly) {
         for (int k = split; k < 1000; ++k) ASSERT_TRUE(recoverable(b.step(inputs[k])));
         EXPECT_EQ(a.save_state(), b.save_state()) << split;
         EXPECT_NE(a.outputs().hysteresis_torque, 0.0);
+        EXPECT_TRUE(std::isfinite(a.outputs().tau_hat));
     }
 }
 

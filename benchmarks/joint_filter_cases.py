@@ -1,0 +1,166 @@
+"""The joint-state filter (tau_hat) and its smoother (tau_smooth) against the
+compliance model and the paper's UKF, on recordings the estimators never
+fitted. Prints the README's table.
+
+Each case simulates HarmonicDriveJoint.fmu under the PD position controller
+of `hdjoint.experiments` on one excitation (the paper's sinusoid, a
+multisine, slow moves with dwells, a chirp), with an external torque on the
+link that neither controller nor estimators know (payload steps, contact
+pushes), default or coarse encoders, and in some cases Bouc-Wen transmission
+hysteresis that no estimator models. The estimators get the joint's
+transmission parameters (the corrected model: wave generator loaded by the
+transmitted torque, wg_load = 1), a link model that is a few percent off
+(`LINK_MODEL_ERROR`) and the encoders' resolutions.
+
+Tuning, the same for both filters: a grid search over their noise settings
+(`hdjoint.tuning`) on a separate tuning recording per encoder set (two sines
+at 0.2 and 0.7 Hz, other payload steps and contact pushes, other noise seed;
+not a test recording), against its torque sensor. The compliance model has nothing to tune.
+
+Run: python benchmarks/joint_filter_cases.py [--quick]
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from hdjoint import _core, experiments, parameters, tuning
+from hdjoint.metrics import error_figures
+
+ENCODERS = {
+    "default": {"motor_counts": 4096.0, "link_counts": 524288.0},   # 1024 lines x4, 19 bit
+    "coarse": {"motor_counts": 2048.0, "link_counts": 32768.0},     # 512 lines x4, 15 bit
+}
+HYSTERESIS = {"bw_A": 3e4, "bw_beta": 2e5, "bw_gamma": 1e5}  # Bouc-Wen, saturates at 0.1 N.m
+# The link model the filter assumes, relative to the joint's.
+LINK_MODEL_ERROR = {"Jl": 1.05, "Bl": 1.10, "mgl": 0.96}
+ESTIMATES = ("tau_compliance", "tau_ukf", "tau_hat", "tau_smooth")
+
+
+@dataclass
+class Case:
+    name: str
+    experiment: str
+    load: str            # "payload" or "contact"
+    encoders: str        # key of ENCODERS
+    hysteresis: bool = False
+    seed: int = 11
+    duration: float | None = None
+    extra: dict = field(default_factory=dict)
+
+
+CASES = [
+    Case("sinusoid (paper), payload steps", "paper", "payload", "default"),
+    Case("multisine, contact pushes", "multisine", "contact", "default", seed=12),
+    Case("sweeps with dwells, payload steps", "sweep", "payload", "default", seed=13),
+    Case("chirp, contact pushes", "chirp", "contact", "default", seed=14),
+    Case("sinusoid (paper), payload, coarse encoders", "paper", "payload", "coarse", seed=15),
+    Case("multisine, contact, coarse encoders", "multisine", "contact", "coarse", seed=16),
+    Case("sweeps, payload, coarse, hysteresis", "sweep", "payload", "coarse", hysteresis=True, seed=17),
+    Case("chirp, contact, hysteresis", "chirp", "contact", "default", hysteresis=True, seed=18),
+]
+LOADS = {"payload": experiments.payload_steps, "contact": experiments.contact_pushes}
+
+
+def joint_parameters(encoders: str, hysteresis: bool) -> dict[str, float]:
+    p = parameters.defaults()
+    p.update(ENCODERS[encoders])
+    if hysteresis:
+        p.update(HYSTERESIS)
+    return p
+
+
+def estimator_parameters(encoders: str) -> dict[str, float]:
+    joint = parameters.defaults()
+    p = parameters.defaults()
+    p["wg_load"] = 1.0  # the corrected model (the diagnosis's wave_generator_load)
+    for name, factor in LINK_MODEL_ERROR.items():
+        p["jsf_" + name] = joint[name] * factor
+    p["jsf_motor_counts"] = ENCODERS[encoders]["motor_counts"]
+    p["jsf_link_counts"] = ENCODERS[encoders]["link_counts"]
+    return p
+
+
+def _tuning_reference(t):
+    w1, w2 = 2 * math.pi * 0.2, 2 * math.pi * 0.7
+    return 0.7 * np.sin(w1 * t) + 0.1 * np.sin(w2 * t), 0.7 * w1 * np.cos(w1 * t) + 0.1 * w2 * np.cos(w2 * t)
+
+
+def tuning_recording(encoders: str, duration: float):
+    experiments.EXPERIMENTS.setdefault("tuning", experiments.Experiment(
+        "tuning", 20.0, _tuning_reference, "two sines (0.2, 0.7 Hz): the benchmark's tuning run"))
+    load = lambda t: (experiments.payload_steps(t, levels=(0.0, -1.5, 2.0, 1.0), hold=5.0)
+                      + experiments.contact_pushes(t, every=2.9, width=0.6, peak=2.0))
+    return experiments.run("tuning", joint=joint_parameters(encoders, False), nominal=parameters.defaults(),
+                           duration=duration, sensors=experiments.Sensors(seed=99), tau_ext=load)
+
+
+def tuned_parameters(encoders: str, duration: float) -> tuple[dict[str, float], str]:
+    rec = tuning_recording(encoders, duration)
+    p = estimator_parameters(encoders)
+    p, _ = tuning.tune(rec, p, tuning.PAPER_UKF_GRID, "tau_ukf")
+    p, _ = tuning.tune(rec, p, tuning.JOINT_FILTER_GRID, "tau_hat")
+    note = ", ".join(f"{k} = {p[k]:g}" for k in (*tuning.PAPER_UKF_GRID, *tuning.JOINT_FILTER_GRID))
+    return p, note
+
+
+def run_case(case: Case, params: dict[str, float], duration: float | None) -> dict[str, object]:
+    rec = experiments.run(case.experiment, joint=joint_parameters(case.encoders, case.hysteresis),
+                          nominal=parameters.defaults(), duration=duration or case.duration,
+                          sensors=experiments.Sensors(seed=case.seed), tau_ext=LOADS[case.load])
+    est = _core.run_estimator(parameters.for_estimator(params), rec.time, rec.i_m, rec.theta_m, rec.theta_l,
+                              smooth=True)
+    truth = rec.extra["tau_joint"]
+    figures = {name: error_figures(est[name], truth) for name in ESTIMATES}
+    return {"case": case, "figures": figures, "seconds": rec.duration}
+
+
+def print_table(results):
+    head = "| case | " + " | ".join(f"{n} RMS / max (N.m)" for n in ESTIMATES) + \
+        " | reduction vs compliance: UKF / tau_hat / tau_smooth |"
+    print(head)
+    print("|" + "---|" * (len(ESTIMATES) + 2))
+    reductions = {n: [] for n in ESTIMATES[1:]}
+    for r in results:
+        f = r["figures"]
+        base = f["tau_compliance"]
+        cells = [f"{f[n].rms:.3f} / {f[n].max:.3f}" for n in ESTIMATES]
+        red = []
+        for n in ESTIMATES[1:]:
+            reductions[n].append(f[n].reduction_against(base))
+            red.append(f"{reductions[n][-1]:+.0f} %".replace("+", "-", 1) if False else f"{reductions[n][-1]:.0f} %")
+        print(f"| {r['case'].name} | " + " | ".join(cells) + " | " + " / ".join(red) + " |")
+    means = {n: float(np.mean(v)) for n, v in reductions.items()}
+    rms_mean = {n: float(np.mean([r["figures"][n].rms for r in results])) for n in ESTIMATES}
+    print(f"| **average** | " + " | ".join(f"{rms_mean[n]:.3f}" for n in ESTIMATES) + " | " +
+          " / ".join(f"**{means[n]:.0f} %**" for n in ESTIMATES[1:]) + " |")
+    return means
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="10 s per case and tuning run (a smoke run)")
+    args = ap.parse_args(argv)
+    duration = 10.0 if args.quick else None
+    start = time.perf_counter()
+    tuned = {}
+    for enc in ENCODERS:
+        tuned[enc], note = tuned_parameters(enc, 10.0 if args.quick else 20.0)
+        print(f"tuned on the tuning recording ({enc} encoders): {note}")
+    results = []
+    for case in CASES:
+        results.append(run_case(case, tuned[case.encoders], duration))
+        print(f"  done: {case.name} ({time.perf_counter() - start:.0f} s)", flush=True)
+    print()
+    means = print_table(results)
+    print(f"\naverage RMS reduction vs compliance: paper UKF {means['tau_ukf']:.1f} %, tau_hat "
+          f"{means['tau_hat']:.1f} %, tau_smooth {means['tau_smooth']:.1f} %  ({time.perf_counter() - start:.0f} s)")
+
+
+if __name__ == "__main__":
+    np.seterr(all="ignore")
+    main()

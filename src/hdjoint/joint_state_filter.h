@@ -1,0 +1,164 @@
+#pragma once
+// The joint-state filter (beyond the paper): the two-mass joint as a Kalman
+// filter on the raw encoder angles, driven by the motor current, and an
+// offline Rauch-Tung-Striebel smoother over it.
+//
+// State x = [theta_l, omega_l, delta, nu, w, r] (link-side units):
+//   theta_l, omega_l  link angle and speed,
+//   delta = theta_m/N - theta_l   total torsion (its own state: theta_m/N and
+//                                 theta_l are almost perfectly correlated),
+//   nu = d(delta)/dt              torsion rate (omega_m = N*(omega_l + nu)),
+//   w                             link load: whatever else acts on the link
+//                                 (external torque, Jl/Bl/mgl errors), a random walk
+//                                 plus its rate r (an integrated random walk: loads
+//                                 that ramp, such as contacts, are followed without lag).
+//   d(w)/dt = r, d(r)/dt = noise
+// Dynamics, with tau(x) the transmitted torque of the corrected compliance
+// chain (eq. 3-8 with kinematic error, wave generator, backlash, the
+// hysteresis torque z of the compliance model):
+//   Jl*d(omega_l)/dt         = tau - Bl*omega_l - mgl*sin(theta_l) - w
+//   N*Jm*d(omega_l + nu)/dt  = Kt*i_m + cogging - tau_fm(omega_m) - Bm*omega_m - tau/N
+// discretised by the linearly implicit trapezoidal rule (A-stable, keeps the
+// undamped torsional resonance undamped; F = (I - h/2 J)^-1 (I + h/2 J)).
+// Process noise: the current noise (and an unmodelled motor torque) as a
+// piecewise-constant acceleration on nu, random walks on w and r.
+// Measurements: theta_m = N*(theta_l + delta) and theta_l, read by floor
+// quantisers: the reading plus q/2 is unbiased with variance q^2/12.
+// Output: tau(x) and its standard deviation from P.
+#include <vector>
+
+#include "linear_algebra.h"
+#include "parameters.h"
+#include "ukf.h"
+
+namespace hdjoint {
+
+constexpr int kJointStates = 6;
+using JointState = Vector<kJointStates>;
+using JointCovariance = Matrix<kJointStates>;
+
+// What the dynamics hold over a sample: the current, the hysteresis torque
+// of the compliance model and the time (friction drift).
+struct JointInput {
+    double i_m = 0.0;
+    double z = 0.0;
+    double t = 0.0;
+};
+
+// The transmitted torque of a state and its gradient by the state.
+struct JointTorque {
+    double tau = 0.0;
+    double d_theta_l = 0.0;  // d tau / d theta_l
+    double d_delta = 0.0;    // d tau / d delta
+    bool valid = false;
+};
+JointTorque joint_state_torque(const JointState& x, const JointInput& in, const Parameters& p);
+
+// The system model for the generic filter (kExtended: step() gives the
+// next state and the transition Jacobian).
+struct JointSystemModel {
+    using State = JointState;
+    using Control = JointInput;
+    static constexpr bool kExtended = true;
+    Parameters p;  // by value: the filter is copied (FMU state) and must not point into another
+    double h = 1e-3;
+
+    // Continuous dynamics dx/dt and its Jacobian J (false: singular torsion).
+    bool derivative(const State& x, const Control& u, State* dx, JointCovariance* J) const;
+    // joint_state_torque, remembering the last point: the filter's output at
+    // a posterior is where the next prediction starts (same state, same input).
+    JointTorque torque(const State& x, const Control& u) const;
+
+private:
+    mutable bool cached_ = false;
+    mutable State cached_x_ = State::Zero();
+    mutable Control cached_u_;
+    mutable JointTorque cached_torque_;
+
+public:
+    State step(const State& x, const Control& u, JointCovariance* F) const;
+    State f(const State& x, const Control& u) const {
+        JointCovariance F;
+        return step(x, u, &F);
+    }
+};
+
+// theta_m and theta_l, linear in the state.
+struct JointMeasurementModel {
+    static constexpr int kSize = 2;
+    static constexpr bool kLinear = true;
+    using Vector = hdjoint::Vector<2>;
+    using Covariance = Matrix<2>;
+    double N = 100.0;
+
+    Eigen::Matrix<double, 2, kJointStates> jacobian() const {
+        Eigen::Matrix<double, 2, kJointStates> H = Eigen::Matrix<double, 2, kJointStates>::Zero();
+        H(0, 0) = N;
+        H(0, 2) = N;
+        H(1, 0) = 1.0;
+        return H;
+    }
+    Vector h(const JointState& x) const { return Vector(N * (x(0) + x(2)), x(0)); }
+};
+
+// One sample of the filter, kept for the smoother.
+struct JointFilterRecord {
+    JointState x_prior = JointState::Zero();
+    JointCovariance P_prior = JointCovariance::Zero();
+    JointCovariance F = JointCovariance::Identity();  // from the previous sample to this one
+    JointState x = JointState::Zero();
+    JointCovariance P = JointCovariance::Zero();
+    JointInput input;  // this sample's current, hysteresis torque and time
+    bool predicted = false;  // false for the first sample (no prior)
+};
+
+struct JointFilterOutput {
+    double tau = 0.0;
+    double tau_std = 0.0;
+    double load = 0.0;  // w, N.m
+    double nis = 0.0;
+};
+
+class JointStateFilter {
+public:
+    JointStateFilter() = default;
+    explicit JointStateFilter(const Parameters& p);
+
+    // One sample: encoder readings (already matched with the current by the
+    // compliance model's delay line) and the input held from this sample on.
+    // The first call initialises at rest in static balance.
+    FilterStatus step(double theta_m, double theta_l, const JointInput& in);
+
+    const JointFilterOutput& output() const { return out_; }
+    const JointFilterRecord& record() const { return record_; }
+    const JointState& state() const { return ukf_.state(); }
+    const JointCovariance& covariance() const { return ukf_.covariance(); }
+    bool started() const { return started_; }
+
+    // Flat state: 1 + 6 + 36 + 3 + 4 values.
+    static constexpr std::size_t kSavedSize = 50;
+    void save(std::vector<double>* out) const;
+    bool load(const std::vector<double>& in, std::size_t* cursor);
+
+private:
+    Parameters p_;
+    JointSystemModel system_;
+    JointMeasurementModel measurement_;
+    JointCovariance Q_ = JointCovariance::Zero();
+    Matrix<2> R_ = Matrix<2>::Identity();
+    double offset_m_ = 0.0, offset_l_ = 0.0;  // q/2 of the floor quantisers
+    UnscentedKalmanFilter<kJointStates> ukf_;
+    JointInput previous_;
+    JointFilterRecord record_;
+    JointFilterOutput out_;
+    bool started_ = false;
+};
+
+// The RTS smoother over filter records (one per sample, in order): the
+// smoothed torque of each sample and its standard deviation.
+struct SmoothedTorque {
+    std::vector<double> tau, tau_std;
+};
+SmoothedTorque smooth_joint_states(const std::vector<JointFilterRecord>& records, const Parameters& p);
+
+}  // namespace hdjoint

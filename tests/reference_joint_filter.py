@@ -1,0 +1,128 @@
+"""Independent numpy/scipy implementation of the joint-state filter and its
+RTS smoother (tau_hat, tau_smooth), a test oracle for the C++ code.
+
+Written from the model as documented in joint_state_filter.h and the README
+(state [theta_l, omega_l, delta, nu, w, r], two-mass dynamics driven by the
+current, linearly implicit trapezoidal step, floor-quantised encoder
+readings), not from the C++ sources. Deliberately different in method where
+it can be: the Jacobian of the dynamics comes from complex-step
+differentiation (exact to round-off) instead of hand-derived partials, the
+step solves with scipy, the update is the textbook Kalman update.
+
+Covers the paper's model without the beyond-the-paper terms (the default
+parameter set), as reference_model.py does.
+"""
+import numpy as np
+import scipy.linalg
+
+from reference_model import kinematic_error, torque_from_torsion, wave_generator_torsion
+
+TWO_PI = 2 * np.pi
+# Initial spreads of the states the first reading does not fix (as documented).
+P0_ANGLE, P0_TORSION, P0_SPEED = 1e-2, 1e-3, 0.1
+
+
+def joint_torque(p, x, i_m):
+    """Transmitted torque of a state (works for complex x: complex-step)."""
+    theta_l, delta = x[0], x[2]
+    theta_m = p["N"] * (theta_l + delta)
+    dtheta_f = delta - wave_generator_torsion(p, p["Kt"] * i_m) - kinematic_error(p, theta_m, theta_l)
+    return torque_from_torsion(p, dtheta_f)
+
+
+def dynamics(p, x, i_m):
+    theta_l, omega_l, delta, nu, w, rate = x
+    tau = joint_torque(p, x, i_m)
+    omega_m = p["N"] * (omega_l + nu)
+    friction = p["Fc"] * np.tanh(omega_m / p["omega_fc"]) + p["Bm"] * omega_m
+    link_acc = (tau - p["jsf_Bl"] * omega_l - p["jsf_mgl"] * np.sin(theta_l) - w) / p["jsf_Jl"]
+    motor_acc = (p["Kt"] * i_m - friction - tau / p["N"]) / (p["N"] * p["Jm"])  # of omega_l + nu
+    return np.array([omega_l, link_acc, nu, motor_acc - link_acc, rate, 0.0 * w])
+
+
+def complex_step_jacobian(fun, x, h=1e-30):
+    n = len(x)
+    J = np.empty((len(fun(x.astype(complex))), n))
+    for k in range(n):
+        dx = np.zeros(n, complex)
+        dx[k] = 1j * h
+        J[:, k] = np.imag(fun(x + dx)) / h
+    return J
+
+
+def torque_gradient(p, x, i_m):
+    return complex_step_jacobian(lambda y: np.array([joint_torque(p, y, i_m)]), x)[0]
+
+
+def transition(p, x, i_m):
+    """Linearly implicit trapezoidal step: (next state, F)."""
+    h = p["Ts"]
+    f = dynamics(p, x, i_m)
+    J = complex_step_jacobian(lambda y: dynamics(p, y, i_m), x)
+    M = np.eye(6) - 0.5 * h * J
+    return x + scipy.linalg.solve(M, h * f), scipy.linalg.solve(M, np.eye(6) + 0.5 * h * J)
+
+
+def noise(p):
+    h = p["Ts"]
+    a = np.hypot(p["Kt"] * p["jsf_current_noise"], p["jsf_q_motor"]) / (p["N"] * p["Jm"])
+    G = np.array([0.0, 0.0, h * h / 2, h, 0.0, 0.0])
+    Q = a * a * np.outer(G, G)
+    Q[4, 4] += p["jsf_q_load"] ** 2
+    Q[5, 5] += p["jsf_q_load_rate"] ** 2
+    qm = TWO_PI / p["jsf_motor_counts"] if p["jsf_motor_counts"] > 0 else 0.0
+    ql = TWO_PI / p["jsf_link_counts"] if p["jsf_link_counts"] > 0 else 0.0
+    R = np.diag([max(p["jsf_r_theta_m"] ** 2 + qm * qm / 12, 1e-24), max(p["jsf_r_theta_l"] ** 2 + ql * ql / 12, 1e-24)])
+    return Q, R, np.array([qm / 2, ql / 2])
+
+
+def joint_filter(p, i_m, theta_m, theta_l):
+    """Filter over samples; returns tau_hat, tau_hat_std and what the smoother needs."""
+    n = len(i_m)
+    Q, R, offset = noise(p)
+    H = np.array([[p["N"], 0, p["N"], 0, 0, 0], [1.0, 0, 0, 0, 0, 0]])
+    out = {"tau_hat": np.empty(n), "tau_hat_std": np.empty(n)}
+    store = {"x": [], "P": [], "x_prior": [], "P_prior": [], "F": []}
+    x = P = None
+    for k in range(n):
+        z = np.array([theta_m[k], theta_l[k]]) + offset
+        if k == 0:
+            x = np.zeros(6)
+            x[0] = z[1]
+            x[2] = z[0] / p["N"] - z[1]
+            x[4] = joint_torque(p, x, i_m[0]) - p["jsf_mgl"] * np.sin(x[0])
+            P = np.diag([P0_ANGLE**2, P0_SPEED**2, P0_TORSION**2, P0_SPEED**2, p["jsf_p0_load"] ** 2, p["jsf_p0_load"] ** 2])
+            F = np.eye(6)
+        else:
+            x, F = transition(p, x, i_m[k - 1])
+            P = F @ P @ F.T + Q
+        store["x_prior"].append(x.copy())
+        store["P_prior"].append(P.copy())
+        store["F"].append(F)
+        S = H @ P @ H.T + R
+        K = P @ H.T @ np.linalg.inv(S)
+        x = x + K @ (z - H @ x)
+        P = P - K @ S @ K.T
+        P = (P + P.T) / 2
+        store["x"].append(x.copy())
+        store["P"].append(P.copy())
+        g = torque_gradient(p, x, i_m[k])
+        out["tau_hat"][k] = joint_torque(p, x, i_m[k])
+        out["tau_hat_std"][k] = np.sqrt(g @ P @ g)
+    return out, store
+
+
+def rts_smoother(p, i_m, store):
+    """Rauch-Tung-Striebel over the stored filter: tau_smooth, tau_smooth_std."""
+    n = len(store["x"])
+    xs, Ps = store["x"][-1], store["P"][-1]
+    tau, std = np.empty(n), np.empty(n)
+    for k in range(n - 1, -1, -1):
+        if k < n - 1:
+            C = store["P"][k] @ store["F"][k + 1].T @ np.linalg.inv(store["P_prior"][k + 1])
+            xs = store["x"][k] + C @ (xs - store["x_prior"][k + 1])
+            Ps = store["P"][k] + C @ (Ps - store["P_prior"][k + 1]) @ C.T
+        g = torque_gradient(p, xs, i_m[k])
+        tau[k] = joint_torque(p, xs, i_m[k])
+        std[k] = np.sqrt(g @ Ps @ g)
+    return tau, std

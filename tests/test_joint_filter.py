@@ -1,0 +1,87 @@
+"""The joint-state filter (tau_hat) and its RTS smoother (tau_smooth): the
+batch path and the estimator FMU (through fmpy) against the independent
+numpy oracle in reference_joint_filter.py, to round-off; and on a real
+closed-loop run with an unknown external torque, better than the compliance
+model."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from hdjoint import _core, experiments, parameters
+from hdjoint.fmu_runner import run_estimator_fmu
+from hdjoint.metrics import error_figures
+
+from reference_joint_filter import joint_filter, rts_smoother
+
+N_SAMPLES = 600
+
+
+@pytest.fixture(scope="module")
+def short_recording():
+    """0.6 s of the joint FMU under the position controller, with a payload step."""
+    load = lambda t: experiments.payload_steps(t, levels=(0.0, 1.0), hold=0.3)
+    return experiments.run("paper", duration=(N_SAMPLES - 1) * 1e-3, tau_ext=load)
+
+
+@pytest.fixture(scope="module")
+def params():
+    return parameters.for_estimator(parameters.defaults())
+
+
+@pytest.fixture(scope="module")
+def batch(short_recording, params):
+    r = short_recording
+    return _core.run_estimator(params, r.time, r.i_m, r.theta_m, r.theta_l, smooth=True)
+
+
+@pytest.fixture(scope="module")
+def oracle(short_recording, params):
+    r = short_recording
+    out, store = joint_filter(params, r.i_m, r.theta_m, r.theta_l)
+    out["tau_smooth"], out["tau_smooth_std"] = rts_smoother(params, r.i_m, store)
+    return out
+
+
+def test_recording_moves_and_is_loaded(short_recording, batch):
+    assert len(short_recording) == N_SAMPLES
+    assert np.ptp(short_recording.extra["tau_joint"]) > 0.5
+    assert np.ptp(batch["tau_hat"]) > 0.5
+
+
+@pytest.mark.parametrize("name", ["tau_hat", "tau_hat_std", "tau_smooth", "tau_smooth_std"])
+def test_batch_equals_oracle_to_round_off(batch, oracle, name):
+    a, b = np.asarray(batch[name]), oracle[name]
+    assert np.isfinite(a).all() and np.isfinite(b).all()
+    assert np.max(np.abs(a - b)) <= 1e-9 * max(1.0, np.max(np.abs(b))), np.max(np.abs(a - b))
+
+
+def test_fmu_equals_batch_exactly(short_recording, params, batch):
+    r = short_recording
+    fmu = run_estimator_fmu(r.time, r.i_m, r.theta_m, r.theta_l, params)
+    for name in ("tau_hat", "tau_hat_std", "tau_ukf", "tau_compliance"):
+        np.testing.assert_array_equal(fmu[name], batch[name], err_msg=name)
+
+
+def test_smoother_needs_no_future_for_the_last_sample(batch):
+    # The RTS smoother's last sample is the filter's.
+    assert batch["tau_smooth"][-1] == batch["tau_hat"][-1]
+    assert np.any(batch["tau_smooth"][:-1] != batch["tau_hat"][:-1])
+
+
+def test_filter_beats_compliance_model_with_coarse_encoders_and_unknown_load():
+    # Closed loop, contact pushes unknown to everyone, 15-bit link / 2048-count
+    # motor encoders, the filter's link model 5 % off: a short benchmark case.
+    joint = {**parameters.defaults(), "motor_counts": 2048.0, "link_counts": 32768.0}
+    rec = experiments.run("multisine", joint=joint, nominal=parameters.defaults(), duration=6.0,
+                          tau_ext=experiments.contact_pushes)
+    p = {**parameters.defaults(), "wg_load": 1.0, "jsf_motor_counts": 2048.0, "jsf_link_counts": 32768.0,
+         "jsf_Jl": 1.05 * joint["Jl"], "jsf_mgl": 0.96 * joint["mgl"]}
+    est = _core.run_estimator(parameters.for_estimator(p), rec.time, rec.i_m, rec.theta_m, rec.theta_l, smooth=True)
+    truth = rec.extra["tau_joint"]
+    base = error_figures(est["tau_compliance"], truth)
+    assert error_figures(est["tau_hat"], truth).reduction_against(base) > 60.0
+    assert error_figures(est["tau_smooth"], truth).reduction_against(base) > 70.0
+    # The standard deviation is of the right order: most errors within 3 sigma.
+    err = np.abs(est["tau_hat"] - truth)
+    assert np.mean(err < 3.0 * est["tau_hat_std"] + 0.02) > 0.9
