@@ -29,7 +29,7 @@ from threadpoolctl import threadpool_limits
 
 from . import parameters
 from .channels import ESTIMATES, SMOOTHED_PARTS, Prepared, depends_on
-from .effects import EFFECTS, KINEMATIC_EQ7, Effect, calibrated_parameters, testable
+from .effects import ALWAYS_CALIBRATED, EFFECTS, KINEMATIC_EQ7, Effect, calibrated_parameters, testable
 from .recording import Recording
 from .signals import folds as make_folds, kinematics, sample_windows, window_labels
 from .structure import HeldOutGain, Order, held_out_gain_sq, order_search, scan
@@ -338,12 +338,12 @@ class Diagnosis:
             return dict(p, cog_order=orders[0].order), ["cog_a", "cog_b"], orders
         return p, list(effect.params), []
 
-    def _anchors(self, part: str) -> list[str]:
+    def _anchors(self, part: str, stateful: bool = False) -> list[str]:
         """The calibrated parameters of `part`, refitted with every hypothesis
         of that part: calibration has already absorbed what it could of the
         missing effect (a viscous term leaks into Kt and Fc), and a hypothesis
         judged against that absorption alone helps some folds and hurts the rest."""
-        own = calibrated_parameters(part, self.nominal, self.has_sensor)
+        own = ALWAYS_CALIBRATED[part] if stateful else calibrated_parameters(part, self.nominal, self.has_sensor)
         # The eq. (7) terms are orthogonal to every other effect (they live at
         # their own angle orders): left out, they make each fit much cheaper.
         return [n for n in self.calibrated_names if n in own and n not in KINEMATIC_EQ7]
@@ -371,8 +371,9 @@ class Diagnosis:
         trial, names, orders = self._candidate_params(effect, p, channels[0])
         if not names:
             return None
-        names_all = names + [a for a in self._anchors(effect.part) if a not in names]
-        fit = self.fit(trial, names_all, channels, set(self._anchors(effect.part)), effect.starts or ({},))
+        anchors = self._anchors(effect.part, effect.stateful)
+        names_all = names + [a for a in anchors if a not in names]
+        fit = self.fit(trial, names_all, channels, set(anchors), effect.starts or ({},))
         per_before = [self._squared(p, [c]) for c in channels]
         per_after = [self._squared(fit.params, [c]) for c in channels]
         before, after = sum(per_before), sum(per_after)

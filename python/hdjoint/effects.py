@@ -27,6 +27,10 @@ class Effect:
     starts: tuple[dict, ...] = ()  # starting values for fits (grids over nonlinear parameters)
     needs: str = ""               # excitation it needs (checked by `testable`)
     lookalikes: tuple[str, ...] = field(default=())
+    # Its state runs through time, so every fit evaluation simulates the whole
+    # recording: it is refitted with the part's always-calibrated parameters
+    # only, not with everything calibration touched (2.5x fewer evaluations).
+    stateful: bool = False
 
 
 def _nonzero(*names):
@@ -58,7 +62,7 @@ EFFECTS: dict[str, Effect] = {e.id: e for e in [
            "Dahl hysteresis torque added to the elastic torque (hys_H, hys_sigma)",
            _nonzero("hys_H"), starts=({"hys_H": 0.1, "hys_sigma": 5e3}, {"hys_H": 0.3, "hys_sigma": 3e4},
                                       {"hys_H": 0.8, "hys_sigma": 1e5}),
-           needs="torque_reversals", lookalikes=("backlash", "coulomb_friction")),
+           needs="torque_reversals", lookalikes=("backlash", "coulomb_friction"), stateful=True),
     Effect("backlash", "transmission", ("backlash",),
            "lost motion: a dead zone of torsion around zero torque", "dead zone of width `backlash` on the torsion",
            _nonzero("backlash"), starts=({"backlash": 1e-5}, {"backlash": 4e-5}, {"backlash": 1.5e-4}),
