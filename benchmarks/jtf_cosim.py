@@ -2,9 +2,10 @@
 error costs the controller.
 
 Runs the shipped SSP systems through fmpy (fmpy.ssp.simulate_ssp), 10 s at
-1 kHz, in three cases:
+1 kHz, in four cases:
   no JTF                 JointTorqueFeedback.ssp with controller.jtf = 0
-  JTF on the estimate    JointTorqueFeedback.ssp (tau_fb <- estimator.tau_ukf)
+  JTF on the UKF         JointTorqueFeedback.ssp (tau_fb <- estimator.tau_ukf)
+  JTF on tau_hat         JointTorqueFeedbackHat.ssp (tau_fb <- estimator.tau_hat, the joint-state filter)
   JTF on the true torque JointTorqueFeedbackSensor.ssp (tau_fb <- joint.tau_joint)
 on the nominal joint (the estimator's own parameters) and on a joint that
 differs from them as real ones do (hdjoint.experiments.TRUE_JOINT_DEVIATIONS).
@@ -30,8 +31,13 @@ LOAD = (2.0, 6.0)   # the controller's default load step (dist_on, dist_off)
 CASES = (
     ("no JTF", "JointTorqueFeedback", {"controller.jtf": 0.0}),
     ("JTF on the UKF estimate", "JointTorqueFeedback", {}),
+    # At the default k_tau = 0.5 the loop on tau_hat is unstable (the
+    # filter's lag on top of the two one-step delays): half the gain.
+    ("JTF on tau_hat (joint-state filter), k_tau = 0.25", "JointTorqueFeedbackHat", {"controller.k_tau": 0.25}),
     ("JTF on the true torque", "JointTorqueFeedbackSensor", {}),
 )
+# The estimate each case feeds back (its error is reported); tau_ukf otherwise.
+FED_BACK = {"JointTorqueFeedbackHat": "estimator.tau_hat"}
 
 
 def true_joint() -> dict[str, float]:
@@ -40,12 +46,12 @@ def true_joint() -> dict[str, float]:
     return {f"joint.{k}": nominal[k] * f for k, f in TRUE_JOINT_DEVIATIONS.items()}
 
 
-def metrics(r: cosim.Trajectories) -> dict[str, float]:
+def metrics(r: cosim.Trajectories, estimate: str = "estimator.tau_ukf") -> dict[str, float]:
     w = r.time >= SKIP
     load = (r.time >= LOAD[0]) & (r.time < LOAD[1] + 0.5)
     e = (r["controller.theta_ref"] - r["joint.theta_l"]) * 1e3   # mrad
     trk = r["controller.tau_d"] - r["joint.tau_joint"]
-    est = r["estimator.tau_ukf"] - r["joint.tau_joint"]
+    est = r[estimate] - r["joint.tau_joint"]
     rms = lambda x: float(np.sqrt(np.mean(x ** 2)))  # noqa: E731
     return {"e_rms": rms(e[w]), "e_max": float(np.abs(e[w]).max()), "e_load_max": float(np.abs(e[load]).max()),
             "trk_rms": rms(trk[w]), "trk_max": float(np.abs(trk[w]).max()),
@@ -65,8 +71,9 @@ def main(argv=None) -> int:
     print("| joint | case | link error RMS (mrad) | max (mrad) | max under the load step (mrad) "
           "| torque tracking RMS (N.m) | max (N.m) | estimator error RMS (N.m) |")
     print("|---|---|---|---|---|---|---|---|")
+    systems = {case: system for case, system, _ in CASES}
     for (joint_name, case), r in results.items():
-        m = metrics(r)
+        m = metrics(r, FED_BACK.get(systems[case], "estimator.tau_ukf"))
         print(f"| {joint_name} | {case} | {m['e_rms']:.3f} | {m['e_max']:.3f} | {m['e_load_max']:.3f} "
               f"| {m['trk_rms']:.3f} | {m['trk_max']:.3f} | {m['est_rms']:.3f} |")
 

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-SYSTEMS = ("JointTorqueFeedback", "JointTorqueFeedbackSensor")
+SYSTEMS = ("JointTorqueFeedback", "JointTorqueFeedbackSensor", "JointTorqueFeedbackHat")
 MASTERS = ("fmpy", "libcosim-ssp", "libcosim-osp", "ecos", "maestro")
 _SYSTEM_DIR = Path(__file__).parent / "systems"
 _SSD_NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription"}
