@@ -35,8 +35,8 @@ TRUE_JOINT_DEVIATIONS = {
 }
 # The joint FMU's wave generator carries the transmitted torque tau/N; the
 # estimator's default is the paper's tau_w = Kt*i_m. (Flexspline damping Df
-# is left out: the plant applies it to the total torsion rate, including the
-# kinematic error's, which is not deformation.)
+# stays at 0 so the published figures keep their meaning; the plant applies
+# it to the elastic torsion rate only, without the kinematic error's.)
 TRUE_JOINT_EXTRA: dict[str, float] = {}
 
 

@@ -68,7 +68,11 @@ bool JointPlant::torque(const PlantState& x, const Vector<3>& z, double* tau) co
     const double elastic = total_torsion(x(0), x(2), p_) - kinematic_error(x(0), x(2), p_);
     double tau_f = 0.0;
     if (!transmitted_torque(elastic, p_, &tau_f)) return false;
-    *tau = tau_f + p_.Df * (x(1) / p_.N - x(3));
+    double dk_dm = 0.0, dk_dl = 0.0;
+    if (p_.Df != 0.0) kinematic_error_gradient(x(0), x(2), p_, &dk_dm, &dk_dl);
+    // Damping of the deformation only: the kinematic error's share of the
+    // torsion rate is geometry (gear meshing), not strain.
+    *tau = tau_f + p_.Df * (x(1) / p_.N - x(3) - dk_dm * x(1) - dk_dl * x(3));
     if (p_.hys_H > 0.0) *tau += z(0);
     if (p_.bw_A > 0.0) *tau += z(1);
     return std::isfinite(*tau);
@@ -111,19 +115,19 @@ bool JointPlant::model(const Vector<S>& x, double t, const PlantInputs& in, Vect
     const double elastic = total_torsion(theta_m, theta_l, p_) - kinematic_error(theta_m, theta_l, p_);
     double tau_f = 0.0;
     if (!transmitted_torque(elastic, p_, &tau_f)) return false;
-    double tau = tau_f + p_.Df * (omega_m / p_.N - omega_l);
     const double scale = plant_friction_scale(t, p_);
     const bool dahl = kFull && p_.hys_H > 0.0, bouc_wen = kFull && p_.bw_A > 0.0;
     const bool lugre = kFull && p_.lugre_sigma0 > 0.0;
 
-    // The effect states: hysteresis driven by the rate of the elastic torsion,
-    // LuGre bristles by the motor speed.
+    // The rate of the elastic torsion (without the kinematic error's, which is
+    // geometry): it drives the hysteresis states and the damping Df.
     double dk_dm = 0.0, dk_dl = 0.0, rate = 0.0;
     double friction = 0.0, level = 0.0, speed = 0.0, dz_lugre = 0.0;
-    if (dahl || bouc_wen) {
+    if (dahl || bouc_wen || p_.Df != 0.0) {
         kinematic_error_gradient(theta_m, theta_l, p_, &dk_dm, &dk_dl);
         rate = omega_m / p_.N - omega_l - dk_dm * omega_m - dk_dl * omega_l;
     }
+    double tau = tau_f + p_.Df * rate;
     if constexpr (kFull) {
         if (dahl) tau += x(4);
         if (bouc_wen) tau += x(5);
@@ -158,10 +162,14 @@ bool JointPlant::model(const Vector<S>& x, double t, const PlantInputs& in, Vect
     const double compliance = flexspline_compliance(tau_f, p_) + wave_generator_compliance(tau_f / p_.N, p_) / p_.N;
     const double stiffness = in_backlash(elastic, p_) ? 0.0 : 1.0 / compliance;  // slack: no stiffness
     kinematic_error_gradient(theta_m, theta_l, p_, &dk_dm, &dk_dl);
-    const double dtau_dtheta_m = stiffness * (1.0 / p_.N - dk_dm);
-    const double dtau_dtheta_l = stiffness * (-1.0 - dk_dl);
-    const double dtau_domega_m = p_.Df / p_.N;
-    const double dtau_domega_l = -p_.Df;
+    // Gradient of the elastic torsion rate by [theta_m, omega_m, theta_l, omega_l].
+    double dd_m = 0.0, dd_l = 0.0;
+    kinematic_error_curvature(theta_m, theta_l, p_, &dd_m, &dd_l);
+    const double drate[4] = {-dd_m * omega_m, 1.0 / p_.N - dk_dm, -dd_l * omega_l, -1.0 - dk_dl};
+    const double dtau_dtheta_m = stiffness * (1.0 / p_.N - dk_dm) + p_.Df * drate[0];
+    const double dtau_dtheta_l = stiffness * (-1.0 - dk_dl) + p_.Df * drate[2];
+    const double dtau_domega_m = p_.Df * drate[1];
+    const double dtau_domega_l = p_.Df * drate[3];
     const double dfriction = lugre ? 0.0 : coulomb_friction_slope(omega_m, p_, scale) + p_.Bm;
 
     J->setZero();
@@ -185,10 +193,6 @@ bool JointPlant::model(const Vector<S>& x, double t, const PlantInputs& in, Vect
             (*J)(3, k) = 1.0 / p_.Jl;
         }
         if (dahl || bouc_wen) {
-            // Gradient of the torsion rate by [theta_m, omega_m, theta_l, omega_l].
-            double dd_m = 0.0, dd_l = 0.0;
-            kinematic_error_curvature(theta_m, theta_l, p_, &dd_m, &dd_l);
-            const double drate[4] = {-dd_m * omega_m, 1.0 / p_.N - dk_dm, -dd_l * omega_l, -1.0 - dk_dl};
             const double sign_rate = (rate > 0.0) - (rate < 0.0);
             if (dahl) {
                 const double by_rate = p_.hys_sigma * (1.0 - sign_rate * x(4) / p_.hys_H);

@@ -523,5 +523,29 @@ TEST(JointPlant, JointTorqueRejectsANonFiniteAngle) {
     EXPECT_TRUE(std::isnan(j.outputs().tau_joint)) << j.outputs().tau_joint;
 }
 
+// Df damps the deformation: a motion along which only the kinematic error
+// changes the torsion (the gears' geometry) is not damped.
+TEST(JointPlant, DampingActsOnTheDeformationNotTheKinematicError) {
+    Parameters p;
+    p.Df = 5.0;
+    p.aw1 = 2e-4;
+    p.al1 = 1e-4;
+    JointPlant j(p);
+    ASSERT_TRUE(j.initialize(0.0));
+    PlantState x;
+    x << 1.3, 40.0, 1.3 / p.N - 1e-4, 0.0;  // a modest torsion
+    double dk_dm = 0.0, dk_dl = 0.0;
+    kinematic_error_gradient(x(0), x(2), p, &dk_dm, &dk_dl);
+    ASSERT_GT(std::fabs(dk_dm * x(1)), 1e-4 * std::fabs(x(1) / p.N));  // the error's rate is not negligible
+    x(3) = (x(1) / p.N - dk_dm * x(1)) / (1.0 + dk_dl);               // the elastic torsion stands still
+    double tau = 0.0, elastic = 0.0;
+    ASSERT_TRUE(j.joint_torque(x, &tau));
+    ASSERT_TRUE(transmitted_torque(total_torsion(x(0), x(2), p) - kinematic_error(x(0), x(2), p), p, &elastic));
+    EXPECT_NEAR(tau, elastic, 1e-12);
+    x(3) += 1e-3;  // now the deformation changes: damped
+    ASSERT_TRUE(j.joint_torque(x, &tau));
+    EXPECT_NEAR(tau - elastic, p.Df * (-1.0 - dk_dl) * 1e-3, 1e-9);
+}
+
 }  // namespace
 }  // namespace hdjoint
