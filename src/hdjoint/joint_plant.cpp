@@ -45,11 +45,22 @@ bool JointPlant::initialize(double tau_ext, std::string* message) {
     // contraction, since N*d(theta_err)/d(theta_m) is far below 1 for any
     // real harmonic drive; iterate to convergence.
     double theta_m = p_.N * (theta_l + spring);
-    for (int it = 0; it < 100; ++it) {
+    bool converged = false;
+    for (int it = 0; it < 100 && !converged; ++it) {
         const double next = p_.N * (theta_l + kinematic_error(theta_m, theta_l, p_) + spring);
-        const bool done = std::fabs(next - theta_m) <= 1e-14 * (1.0 + std::fabs(theta_m));
+        converged = std::fabs(next - theta_m) <= 1e-14 * (1.0 + std::fabs(theta_m));
         theta_m = next;
-        if (done) break;
+    }
+    if (!converged) {
+        double dk_dm = 0.0, dk_dl = 0.0;
+        kinematic_error_gradient(theta_m, theta_l, p_, &dk_dm, &dk_dl);
+        if (message) {
+            *message = "the kinematic error is too large to start from: N*d(theta_err)/d(theta_m) = " +
+                       std::to_string(p_.N * dk_dm) +
+                       " must stay well below 1 (the motor angle carrying the initial load is not unique); "
+                       "reduce the amplitudes at motor-angle orders (aw1, bw1, aw2, bw2, ke_m*)";
+        }
+        return false;
     }
     x_ << theta_m, 0.0, theta_l, 0.0;
     z_.setZero();  // no hysteresis torque, relaxed bristles

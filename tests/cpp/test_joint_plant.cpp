@@ -547,5 +547,17 @@ TEST(JointPlant, DampingActsOnTheDeformationNotTheKinematicError) {
     EXPECT_NEAR(tau - elastic, p.Df * (-1.0 - dk_dl) * 1e-3, 1e-9);
 }
 
+// A kinematic error so steep in the motor angle that the starting angle is
+// not unique is refused with a message that says so (not "singular torsion").
+TEST(JointPlant, TooSteepKinematicErrorIsNamedAtStart) {
+    Parameters p;
+    p.aw1 = 0.02;  // N * omega_w * aw1 = 4: far beyond any real harmonic drive
+    JointPlant j(p);
+    std::string message;
+    EXPECT_FALSE(j.initialize(0.0, &message));
+    EXPECT_NE(message.find("kinematic error is too large"), std::string::npos) << message;
+    EXPECT_NE(message.find("aw1"), std::string::npos) << message;
+}
+
 }  // namespace
 }  // namespace hdjoint
