@@ -218,11 +218,11 @@ std::map<std::string, OutArray> simulate_joint(const std::map<std::string, doubl
     return out;
 }
 
-// Seconds for n estimator samples on a synthetic moving joint, timed in C++
-// (for the benchmark script: the cost per step without Python in the loop).
-double time_estimator(const std::map<std::string, double>& values, long n) {
-    const Parameters p = parameters_from(values, true, false);
-    TorqueEstimator estimator(p);
+// Seconds for n samples of `step(theta_m, theta_l, i_m, t)` on a synthetic
+// moving joint (0.5 rad link swing, 3 N.m torque), timed in C++: the cost
+// per step without Python in the loop, for the benchmark script.
+template <typename Step>
+double time_on_moving_joint(const Parameters& p, long n, Step step) {
     double sink = 0.0;
     nb::gil_scoped_release release;
     const auto start = std::chrono::steady_clock::now();
@@ -230,33 +230,31 @@ double time_estimator(const std::map<std::string, double>& values, long n) {
         const double t = static_cast<double>(k) * p.Ts;
         const double theta_l = 0.5 * std::sin(1.5 * t);
         const double tau = 3.0 * std::sin(1.5 * t);
-        const EstimatorInputs in{tau / (p.N * p.Kt), p.N * (theta_l + tau / p.Kf), theta_l};
-        estimator.step(in);
-        sink += estimator.outputs().tau_ukf;
+        sink += step(p.N * (theta_l + tau / p.Kf), theta_l, tau / (p.N * p.Kt), t);
     }
     const auto stop = std::chrono::steady_clock::now();
     if (!std::isfinite(sink)) throw std::runtime_error("benchmark diverged");
     return std::chrono::duration<double>(stop - start).count();
 }
 
-// Seconds for n samples of the joint-state filter alone (tau_hat), on the
-// same synthetic moving joint, timed in C++.
+// The whole estimator step (compliance model, paper UKF, joint-state filter).
+double time_estimator(const std::map<std::string, double>& values, long n) {
+    const Parameters p = parameters_from(values, true, false);
+    TorqueEstimator estimator(p);
+    return time_on_moving_joint(p, n, [&](double theta_m, double theta_l, double i_m, double) {
+        estimator.step(EstimatorInputs{i_m, theta_m, theta_l});
+        return estimator.outputs().tau_ukf;
+    });
+}
+
+// The joint-state filter alone (tau_hat).
 double time_joint_filter(const std::map<std::string, double>& values, long n) {
     const Parameters p = parameters_from(values, true, false);
     JointStateFilter filter(p);
-    double sink = 0.0;
-    nb::gil_scoped_release release;
-    const auto start = std::chrono::steady_clock::now();
-    for (long k = 0; k < n; ++k) {
-        const double t = static_cast<double>(k) * p.Ts;
-        const double theta_l = 0.5 * std::sin(1.5 * t);
-        const double tau = 3.0 * std::sin(1.5 * t);
-        filter.step(p.N * (theta_l + tau / p.Kf), theta_l, {tau / (p.N * p.Kt), 0.0, t});
-        sink += filter.output().tau;
-    }
-    const auto stop = std::chrono::steady_clock::now();
-    if (!std::isfinite(sink)) throw std::runtime_error("benchmark diverged");
-    return std::chrono::duration<double>(stop - start).count();
+    return time_on_moving_joint(p, n, [&](double theta_m, double theta_l, double i_m, double t) {
+        filter.step(theta_m, theta_l, {i_m, 0.0, t});
+        return filter.output().tau;
+    });
 }
 
 nb::list table() {

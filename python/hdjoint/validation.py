@@ -44,11 +44,6 @@ def validate(rec: Recording, nominal: dict, calibrated: dict, corrected: dict) -
             "estimator": estimator_comparison(_Source(rec, nominal), corrected)}
 
 
-def improved(entry: dict) -> bool:
-    """Whether the corrected set beats the calibrated one on every channel of a validation entry."""
-    return all(row["corrected"]["rms"] <= row["calibrated"]["rms"] for row in entry["channels"].values())
-
-
 def summary_line(entry: dict) -> str:
     parts = [f"{name} {row['calibrated']['rms']:.4f} -> {row['corrected']['rms']:.4f}"
              for name, row in entry["channels"].items()]
