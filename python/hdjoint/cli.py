@@ -7,25 +7,7 @@ import argparse
 import sys
 from pathlib import Path
 
-
-class UserError(Exception):
-    """Bad input from the user: reported in one line, exit code 2."""
-
-
-def _params(path):
-    from . import parameters
-    try:
-        return parameters.load(path)
-    except parameters.ParameterError as e:
-        raise UserError(str(e)) from None
-
-
-def _read(path):
-    from .recording import RecordingError, read_recording
-    try:
-        return read_recording(path)
-    except RecordingError as e:
-        raise UserError(str(e)) from None
+from .jobs import UserError, read_params as _params, read_recording as _read
 
 
 def cmd_fmus(args) -> int:
@@ -99,35 +81,9 @@ def cmd_estimate(args) -> int:
 
 
 def cmd_diagnose(args) -> int:
-    import json
-    import shutil
-    import tempfile
-    from . import parameters, report
-    from .diagnosis import DiagnosisError, diagnose
-    from .validation import summary_line, validate
-    rec = _read(args.recording)
-    others = [_read(path) for path in args.validate]  # read first: a bad file stops before any work
-    nominal = _params(args.params)
-    try:
-        diag, doc = diagnose(rec, nominal, progress=lambda m: print(f"[diagnose] {m}", file=sys.stderr, flush=True))
-        if others:
-            print("[diagnose] checking the corrected model on the other recordings", file=sys.stderr, flush=True)
-            doc["validation"] = [validate(o, diag.nominal, diag.calibrated_params, doc["params"]) for o in others]
-    except DiagnosisError as e:
-        raise UserError(str(e)) from None
-    page = report.build(diag, doc)
-    # Everything is computed; stage the files, then move them in, so a
-    # failure never leaves a half-written DIR.
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(dir=out) as tmp:
-        stage = Path(tmp)
-        (stage / "findings.json").write_text(json.dumps(doc, indent=2, default=float) + "\n")
-        parameters.save(stage / "params.json", doc["params"])
-        parameters.save_ssv(stage / "params.ssv", doc["params"], name="hdjoint corrected")
-        (stage / "report.html").write_text(page)
-        for name in ("findings.json", "params.json", "params.ssv", "report.html"):
-            shutil.move(str(stage / name), out / name)
+    from .jobs import diagnose_to_directory
+    doc = diagnose_to_directory(args.recording, args.params, args.out, args.validate)
+    from .validation import summary_line
     print(f"verdict: {doc['verdict']}")
     for f in doc["findings"]:
         fit = f["fit"]
@@ -137,7 +93,7 @@ def cmd_diagnose(args) -> int:
         print(f"  unexplained: {u['channel']} residual depends on {u['feature']} (largest at {u['largest_at']})")
     for v in doc.get("validation", []):
         print(f"  validation: {summary_line(v)}")
-    print(f"wrote {out}/findings.json, params.json, params.ssv, report.html ({doc['seconds']} s)")
+    print(f"wrote {args.out}/findings.json, params.json, params.ssv, report.html ({doc['seconds']} s)")
     return 0
 
 

@@ -10,6 +10,7 @@ from pathlib import Path
 from . import experiments, parameters, plots
 from .fmu_runner import run_estimator_fmu
 from .fmus import export_fmus
+from .jobs import diagnose_to_directory
 from .metrics import error_figures
 from .paper_table import reproduce
 from .recording import write_csv, write_recording
@@ -45,8 +46,8 @@ def run_demo(out: Path) -> None:
     print(f"tuned UKF settings: {table.tuned_settings}")
 
     _say("[5/5] diagnosing the recording against the nominal model (report: diagnosis/report.html)")
-    from .cli import main as cli_main
     parameters.save(out / "nominal_params.json", parameters.defaults())
-    cli_main(["diagnose", str(out / "paper_recording.csv"), "--params", str(out / "nominal_params.json"),
-              "--out", str(out / "diagnosis")])
+    # A failed diagnosis raises, so the demo fails with it (its exit code says so).
+    doc = diagnose_to_directory(out / "paper_recording.csv", out / "nominal_params.json", out / "diagnosis")
+    print(f"diagnosis verdict: {doc['verdict']}")
     print(f"outputs in {out} ({time.perf_counter() - started:.1f} s)")

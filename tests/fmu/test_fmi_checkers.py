@@ -16,7 +16,7 @@ from fmpy.validation import validate_fmu
 
 from hdjoint.fmus import FMU_NAMES, fmu_path
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 VDMCHECK = REPO / "build" / "cosim-tools" / "vdmcheck2" / "vdmcheck-1.1.3" / "VDMCheck2.sh"
 
 

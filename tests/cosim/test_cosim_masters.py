@@ -50,7 +50,7 @@ SMOOTH = {"joint.motor_counts": 0.0, "joint.link_counts": 0.0}   # quantisation 
 LINK_COUNT = 2 * np.pi / 524288
 
 # The jar scripts/install_cosim.sh fetches into the checkout (found wherever pytest runs from).
-_JAR = Path(__file__).resolve().parents[1] / "build" / "cosim-tools" / "maestro-3.1.1-jar-with-dependencies.jar"
+_JAR = Path(__file__).resolve().parents[2] / "build" / "cosim-tools" / "maestro-3.1.1-jar-with-dependencies.jar"
 if _JAR.is_file():
     os.environ.setdefault("HDJOINT_MAESTRO_JAR", str(_JAR))
 

@@ -16,7 +16,7 @@ from hdjoint.fmus import fmu_path
 
 from conftest import ESTIMATOR, FMU_NAMES, JOINT
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 
 # name: (causality, unit) -- CONTRACT.md, "Two FMUs".
 CONTRACT = {

@@ -14,7 +14,7 @@ from fmpy import simulate_fmu
 from hdjoint import parameters
 from hdjoint.fmus import fmu_path
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).resolve().parents[1] / "data"
 TWO_PI = 2 * np.pi
 DEFAULTS = parameters.defaults()
 
