@@ -1,4 +1,4 @@
-"""Speed figures for the README (printed, not asserted):
+"""Speed figures of the estimators (printed and written to docs/results/estimator_speed.md, not asserted):
   - ns per estimator step (compliance model + paper UKF + joint-state filter)
     and per joint-state filter step alone, timed inside C++; the smoother's cost per sample,
   - us per step through JointTorqueEstimator.fmu driven by fmpy,
@@ -9,7 +9,6 @@ Run: python benchmarks/bench_estimator.py
 from __future__ import annotations
 
 import os
-import platform
 import subprocess
 import sys
 import tempfile
@@ -21,6 +20,7 @@ import numpy as np
 from hdjoint import _core, experiments, parameters
 from hdjoint.fmu_runner import run_estimator_fmu
 from hdjoint.recording import write_recording
+from results import ResultsPage
 
 
 def best_of(fn, repeats=5):
@@ -34,7 +34,8 @@ def best_of(fn, repeats=5):
 
 def main():
     params = parameters.for_estimator(parameters.defaults())
-    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}")
+    page = ResultsPage("estimator_speed", "Estimator speed", "python benchmarks/bench_estimator.py")
+    print = page.say  # noqa: A001 - every figure printed also goes on the results page
 
     n = 2_000_000
     seconds = min(_core.time_estimator(params, n) for _ in range(3))
@@ -71,6 +72,7 @@ def main():
                    "-o", str(Path(tmp) / "est.csv")]
             wall = best_of(lambda: subprocess.run(cmd, check=True, capture_output=True), 3)
             print(f"`hdjoint estimate` 58 s, --engine {engine:5s}: {wall:8.2f} s (whole command, incl. start-up)")
+    page.write()
 
 
 if __name__ == "__main__":
