@@ -117,7 +117,7 @@ class Calls:
     """The FMI functions of one binary with raw statuses (fmpy's wrappers raise instead)."""
 
     def __init__(self, dll):
-        c, d, u, sz = ctypes.c_void_p, ctypes.c_double, ctypes.c_uint, ctypes.c_size_t
+        c, d, sz = ctypes.c_void_p, ctypes.c_double, ctypes.c_size_t
         i, pd, pu = ctypes.c_int, ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_uint)
         self.f = {}
         for name, args in {
