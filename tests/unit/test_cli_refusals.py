@@ -253,3 +253,11 @@ def test_blocks_join_to_the_whole_recording(simulated, tmp_path, capsys, monkeyp
     code, out, err = run_cli(capsys, "estimate", simulated, "-o", small)
     assert code == 0, err
     assert small.read_bytes() == whole.read_bytes()
+
+
+def test_an_fmu_error_names_the_failed_call_once():
+    from hdjoint.fmu_runner import FmuError, run_estimator_fmu
+    with pytest.raises(FmuError) as caught:
+        run_estimator_fmu(np.arange(3) * 1e-3, np.zeros(3), np.zeros(3), np.zeros(3), {"Ts": 1000.0})
+    assert str(caught.value).count("fmi2SetReal") == 1, str(caught.value)
+    assert "Ts = 1000" in str(caught.value)
