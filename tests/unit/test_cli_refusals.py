@@ -261,3 +261,19 @@ def test_an_fmu_error_names_the_failed_call_once():
         run_estimator_fmu(np.arange(3) * 1e-3, np.zeros(3), np.zeros(3), np.zeros(3), {"Ts": 1000.0})
     assert str(caught.value).count("fmi2SetReal") == 1, str(caught.value)
     assert "Ts = 1000" in str(caught.value)
+
+
+def test_a_gap_between_two_blocks_is_found_and_split_alike(rec_csv, tmp_path, capsys, monkeypatch):
+    """The gap is the step into the second block (rows 0-999, then 1000-...)."""
+    from hdjoint import recording
+    with_gap(rec_csv)
+    whole = tmp_path / "whole.csv"
+    assert run_cli(capsys, "estimate", rec_csv, "--split-gaps", "-o", whole)[0] == 0
+    monkeypatch.setattr(recording.iter_recording, "__defaults__", (1000,))
+    code, _, err = run_cli(capsys, "estimate", rec_csv, "-o", tmp_path / "refused.csv")
+    assert code == 2
+    assert_one_line_error(err, "a gap of 1.001 s", "lines 1001 to 1002")
+    blocks = tmp_path / "blocks.csv"
+    code, _, err = run_cli(capsys, "estimate", rec_csv, "--split-gaps", "-o", blocks)
+    assert code == 0 and "lines 1001 to 1002" in err
+    assert blocks.read_bytes() == whole.read_bytes()
