@@ -150,6 +150,9 @@ class _StreamedFmu:
             t, row = self._pending
             self.emit(np.array([t]), np.array([self._stepper.step(t, self.ts, row.tolist())]))
             self._pending = None
+        self.close()
+
+    def close(self) -> None:
         if self._instance is not None:
             self._instance.close()
             self._instance = None
@@ -194,17 +197,20 @@ def _streamed(opts: Options, blocks: TimedBlocks, params: dict) -> dict:
 
         fmu = _StreamedFmu(params, blocks.ts, emit)
         has_sensor = None
-        for block in blocks:
-            rec = block.rec
-            has_sensor = rec.tau_sensor is not None if has_sensor is None else has_sensor
-            inputs = np.column_stack([rec.i_m, rec.theta_m, rec.theta_l])
-            for start, stop, new_segment in _pieces(len(rec), block.cuts):
-                if new_segment:
-                    fmu.end_segment()
-                if has_sensor:
-                    sensor_rows.append(rec.tau_sensor[start:stop])
-                fmu.feed(rec.time[start:stop], inputs[start:stop])
-        fmu.end_segment()
+        try:
+            for block in blocks:
+                rec = block.rec
+                has_sensor = rec.tau_sensor is not None if has_sensor is None else has_sensor
+                inputs = np.column_stack([rec.i_m, rec.theta_m, rec.theta_l])
+                for start, stop, new_segment in _pieces(len(rec), block.cuts):
+                    if new_segment:
+                        fmu.end_segment()
+                    if has_sensor:
+                        sensor_rows.append(rec.tau_sensor[start:stop])
+                    fmu.feed(rec.time[start:stop], inputs[start:stop])
+            fmu.end_segment()
+        finally:
+            fmu.close()  # also when a later block is refused
     return {name: f.result() for name, f in figures.items()} if has_sensor else {}
 
 
