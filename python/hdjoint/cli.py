@@ -1,13 +1,15 @@
 """The `hdjoint` command line. Exit code 0 on success; otherwise a one-line
-reason on stderr and a non-zero code (2: bad input, 1: failure while running).
+reason on stderr and a non-zero code: 2 for usage and input errors (bad
+arguments, unreadable or malformed files, a time base or output location
+that would go wrong), 1 for a failure while running. docs/robustness.md.
 Heavy modules are imported inside the subcommands, so `hdjoint --help` is quick."""
 from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 
-from .jobs import UserError, read_params as _params, read_recording as _read
+from .jobs import UserError, check_output_file, read_params as _params
+from .timebase import TIME_UNITS
 
 
 def cmd_fmus(args) -> int:
@@ -20,6 +22,7 @@ def cmd_fmus(args) -> int:
 def cmd_simulate(args) -> int:
     from . import experiments
     from .recording import write_recording
+    check_output_file(args.output, inputs=(args.params, args.joint))  # before any work
     nominal = _params(args.params)
     joint = _params(args.joint) if args.joint else experiments.true_joint_parameters(nominal)
     rec = experiments.run(args.experiment, joint=joint, nominal=nominal, duration=args.duration,
@@ -29,60 +32,21 @@ def cmd_simulate(args) -> int:
     return 0
 
 
-def _estimator_params(args, rec):
-    """The parameter set, with Ts taken from the recording when the file does not set it."""
-    import json
-    params = _params(args.params)
-    given = json.loads(Path(args.params).read_text()) if args.params else {}
-    if "Ts" not in given:
-        params["Ts"] = float(f"{rec.median_step:.6g}")
-        if abs(params["Ts"] - 1e-3) > 1e-9:
-            print(f"note: estimator sample period Ts = {params['Ts']:g} s (the recording's median step)",
-                  file=sys.stderr)
-    return params
-
-
 def cmd_estimate(args) -> int:
-    from . import parameters
-    from .metrics import error_figures
-    from .recording import write_csv
-    rec = _read(args.recording)
-    params = parameters.for_estimator(_estimator_params(args, rec))
-    if args.engine == "fmu":
-        from .fmu_runner import FmuError, run_estimator_fmu
-        try:
-            est = run_estimator_fmu(rec.time, rec.i_m, rec.theta_m, rec.theta_l, params)
-        except FmuError as e:
-            raise UserError(f"{args.recording}: {e}") from None
-    else:
-        from . import _core
-        try:
-            est = _core.run_estimator(params, rec.time, rec.i_m, rec.theta_m, rec.theta_l)
-        except RuntimeError as e:
-            raise UserError(f"{args.recording}: {e}") from None
-        from .fmu_runner import ESTIMATOR_OUTPUTS
-        est = {name: est[name] for name in ESTIMATOR_OUTPUTS}  # the FMU engine's columns, in its order
-    if args.smooth:
-        # The smoother runs offline over the joint-state filter's samples, in
-        # the batch path, whichever engine computed the causal estimates.
-        from . import _core
-        try:
-            est["tau_smooth"] = _core.run_estimator(params, rec.time, rec.i_m, rec.theta_m, rec.theta_l,
-                                                    smooth=True)["tau_smooth"]
-        except RuntimeError as e:
-            raise UserError(f"{args.recording}: {e}") from None
-    write_csv(args.output, {"time": rec.time, **est})
-    if rec.tau_sensor is not None:
+    from .estimate_job import Options, estimate_to_file
+    figures = estimate_to_file(Options(
+        recording=args.recording, output=args.output, params=args.params, engine=args.engine, smooth=args.smooth,
+        time_unit=args.time_unit, split_gaps=args.split_gaps, allow_jitter=args.allow_jitter))
+    if figures:
         print(f"{'estimate':<16} {'RMS error':>10} {'max error':>10}   (N.m, against tau_sensor)")
-        for name in ("tau_compliance", "tau_ukf", "tau_hat") + (("tau_smooth",) if args.smooth else ()):
-            fig = error_figures(est[name], rec.tau_sensor)
+        for name, fig in figures.items():
             print(f"{name:<16} {fig.rms:>10.4f} {fig.max:>10.4f}")
     return 0
 
 
 def cmd_diagnose(args) -> int:
     from .jobs import diagnose_to_directory
-    doc = diagnose_to_directory(args.recording, args.params, args.out, args.validate)
+    doc = diagnose_to_directory(args.recording, args.params, args.out, args.validate, args.time_unit)
     from .validation import summary_line
     print(f"verdict: {doc['verdict']}")
     for f in doc["findings"]:
@@ -98,9 +62,14 @@ def cmd_diagnose(args) -> int:
 
 
 def cmd_demo(args) -> int:
-    from .demo import run_demo
-    run_demo(Path(args.out))
+    from .jobs import demo
+    demo(args.out)
     return 0
+
+
+def _time_unit_argument(p) -> None:
+    p.add_argument("--time-unit", choices=tuple(TIME_UNITS),
+                   help="unit of the recording's time column (default: seconds, refused when implausible)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -129,7 +98,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--smooth", action="store_true",
                    help="add tau_smooth: the RTS smoother over the joint-state filter (offline; always computed "
                         "by the native batch path, also with --engine fmu)")
-    p.add_argument("-o", "--output", required=True, help="estimates to write (CSV)")
+    p.add_argument("-o", "--output", required=True, help="estimates to write (CSV); never the recording itself")
+    _time_unit_argument(p)
+    p.add_argument("--split-gaps", action="store_true",
+                   help="at a gap (a step over 10 median steps) restart the estimator instead of refusing the "
+                        "recording; each gap is named in a warning")
+    p.add_argument("--allow-jitter", action="store_true",
+                   help="accept steps more than 20 %% off the median step (the estimator still samples every Ts)")
     p.set_defaults(run=cmd_estimate)
 
     p = sub.add_parser("diagnose", help="locate and name what the model leaves out of a recording")
@@ -138,6 +113,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, help="directory for findings.json, params.json, params.ssv, report.html")
     p.add_argument("--validate", nargs="+", default=[], metavar="RECORDING",
                    help="other recordings of the same joint: the corrected model is checked on them (never fitted)")
+    _time_unit_argument(p)
     p.set_defaults(run=cmd_diagnose)
 
     p = sub.add_parser("demo", help="the main job on built-in data: FMUs, estimation, paper table, report")
@@ -147,7 +123,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
-    args = build_parser().parse_args(argv)
+    try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as e:  # argparse: --help (0) or a usage error (2), already printed
+        return e.code
     try:
         return args.run(args)
     except UserError as e:

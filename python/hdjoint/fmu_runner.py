@@ -86,7 +86,7 @@ class FmuInstance:
         try:
             return fn(*args)
         except FMICallException as e:
-            raise FmuError(f"{self.path.name}: {what}: {self.last_error()}") from e
+            raise FmuError(f"{self.path.name}: {what}: {self.last_error().removeprefix(what + ': ')}") from e
 
     def value_references(self, names) -> list[int]:
         missing = [n for n in names if n not in self.variables]

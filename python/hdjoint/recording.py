@@ -12,13 +12,14 @@ applies, the 1-based line (the header is line 1) and the column.
 from __future__ import annotations
 
 import csv
-import io
+import itertools
 import math
 import os
+import re
 import secrets
 import warnings
 from dataclasses import dataclass, field
-from typing import Iterable, Mapping, Sequence
+from typing import Iterable, Iterator, Mapping, Sequence
 
 import numpy as np
 
@@ -34,7 +35,9 @@ __all__ = [
     "Recording",
     "RecordingError",
     "read_recording",
+    "iter_recording",
     "write_csv",
+    "CsvWriter",
     "write_recording",
 ]
 
@@ -151,53 +154,6 @@ class Recording:
 # Reading
 
 
-def _read_text(path: str) -> str:
-    """The whole file as text (a recording fits in memory by design)."""
-    try:
-        # utf-8-sig: tolerate the byte-order mark spreadsheet programs write.
-        with open(path, encoding="utf-8-sig") as f:
-            return f.read()
-    except FileNotFoundError:
-        raise RecordingError(path, "file not found") from None
-    except IsADirectoryError:
-        raise RecordingError(path, "is a directory, not a file") from None
-    except UnicodeDecodeError as exc:
-        raise RecordingError(path, f"not UTF-8 text ({exc.reason} at byte "
-                                   f"{exc.start})") from None
-    except OSError as exc:
-        raise RecordingError(path, f"cannot read file: {exc.strerror or exc}") from None
-
-
-def _split_rows(path: str, text: str) -> tuple[list[str], list[list[str]], list[int]]:
-    """Header, data rows and each row's 1-based line number.
-
-    Blank lines are skipped (editors and some loggers leave them at the end)
-    but still counted, so line numbers match what an editor shows.
-    """
-    reader = csv.reader(io.StringIO(text))
-    header, header_line = None, None
-    rows, lines = [], []
-    try:
-        for row in reader:
-            if not row:
-                continue
-            if header is None:
-                header, header_line = row, reader.line_num
-                continue
-            rows.append(row)
-            lines.append(reader.line_num)
-    except csv.Error as exc:
-        raise RecordingError(path, f"malformed CSV: {exc}",
-                             line=reader.line_num) from None
-    if header is None:
-        raise RecordingError(path, "file is empty (no header row)")
-    if header_line != 1:
-        # Keep the "header is line 1" promise honest when blank lines lead.
-        raise RecordingError(path, "header row must be the first line",
-                             line=header_line)
-    return header, rows, lines
-
-
 def _check_header(path: str, header: list[str]) -> list[str]:
     names = [name.strip() for name in header]
     seen: dict[str, int] = {}
@@ -289,58 +245,148 @@ def _check_time(path, time, lines):
             line=lines[k], column="time")
 
 
-def _load_fast(path: str, text: str) -> Recording | None:
-    """Optimistic loader for the common, well-formed, all-numeric file.
+def _open(path: str):
+    try:
+        # utf-8-sig: tolerate the byte-order mark spreadsheet programs write.
+        return open(path, encoding="utf-8-sig", newline="")
+    except FileNotFoundError:
+        raise RecordingError(path, "file not found") from None
+    except IsADirectoryError:
+        raise RecordingError(path, "is a directory, not a file") from None
+    except OSError as exc:
+        raise RecordingError(path, f"cannot read file: {exc.strerror or exc}") from None
+
+
+def _read_lines(path: str, f, count: int) -> list[str]:
+    try:
+        return list(itertools.islice(f, count))
+    except UnicodeDecodeError as exc:
+        raise RecordingError(path, f"not UTF-8 text ({exc.reason} at byte {exc.start} of a block)") from None
+    except OSError as exc:
+        raise RecordingError(path, f"cannot read file: {exc.strerror or exc}") from None
+
+
+def _read_header(path: str, f) -> list[str]:
+    first = _read_lines(path, f, 1)
+    if not first or not first[0].strip():
+        rest = _read_lines(path, f, 1 << 16)
+        if any(line.strip() for line in rest):
+            # Keep the "header is line 1" promise honest when blank lines lead.
+            raise RecordingError(path, "header row must be the first line",
+                                 line=2 + next(i for i, line in enumerate(rest) if line.strip()))
+        raise RecordingError(path, "file is empty (no header row)")
+    try:
+        header = next(csv.reader(first))
+    except csv.Error as exc:
+        raise RecordingError(path, f"malformed CSV: {exc}", line=1) from None
+    return _check_header(path, header)
+
+
+def _chunk_fast(names, lines: list[str]) -> dict[str, np.ndarray] | None:
+    """Columns of a well-formed, all-numeric block, or None on any doubt.
 
     np.loadtxt parses in C, several times faster than csv + float() per
-    cell.  It cannot say which line is wrong, so on any doubt (quotes, text
-    columns, bad values, bad time order, ...) this returns None and the
-    checked loader, which produces every error message, takes over.
+    cell.  It cannot say which line is wrong, so on any doubt (quotes, blank
+    lines, text columns, bad values, bad time order, ...) the checked parser,
+    which produces every error message, takes over.
     """
-    first, _, body = text.partition("\n")
-    if '"' in text or not first.strip():
+    text = "".join(lines)
+    if '"' in text or _BLANK_LINE.search(text):
         return None
-    names = _check_header(path, first.split(","))  # header errors are final
     try:
         with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # loadtxt warns on empty input
-            data = np.loadtxt(io.StringIO(body), delimiter=",", comments=None,
-                              dtype=float, ndmin=2)
+            warnings.simplefilter("ignore")
+            data = np.loadtxt(lines, delimiter=",", comments=None, dtype=float, ndmin=2)
     except ValueError:
         return None
-    if data.shape[0] < MIN_ROWS or data.shape[1] != len(names):
+    if data.shape != (len(lines), len(names)):
         return None
     columns = dict(zip(names, np.ascontiguousarray(data.T)))
-    known = {name: columns.pop(name) for name in KNOWN_COLUMNS if name in columns}
-    if not all(np.isfinite(a).all() for a in known.values()):
+    if not all(np.isfinite(columns[name]).all() for name in KNOWN_COLUMNS if name in columns):
         return None
-    if not (np.diff(known["time"]) > 0).all():
+    if not (np.diff(columns["time"]) > 0).all():
         return None
-    return Recording(extra=columns, path=path, **known)
+    return columns
 
 
-def _load_checked(path: str, text: str) -> Recording:
-    """Cell-by-cell loader that pinpoints the first problem in the file."""
-    header, rows, lines = _split_rows(path, text)
-    names = _check_header(path, header)
-    _check_row_lengths(path, rows, lines, len(names))
-    if len(rows) < MIN_ROWS:
-        raise RecordingError(
-            path, f"needs at least {MIN_ROWS} rows of data, found {len(rows)}")
+def _chunk_checked(path, names, lines: list[str], first_line: int):
+    """Cell-by-cell parse of a block that pinpoints its first problem."""
+    reader = csv.reader(lines)
+    rows, numbers = [], []
+    try:
+        for row in reader:
+            if row:
+                rows.append(row)
+                numbers.append(first_line + reader.line_num - 1)
+    except csv.Error as exc:
+        raise RecordingError(path, f"malformed CSV: {exc}", line=first_line + reader.line_num - 1) from None
+    if not rows:
+        return {}, []
+    _check_row_lengths(path, rows, numbers, len(names))
     columns = list(zip(*rows))
-    known = _parse_known_columns(path, names, columns, lines)
-    _check_time(path, known["time"], lines)
-    extra = {name: _parse_extra_column(columns[i])
-             for i, name in enumerate(names) if name not in KNOWN_COLUMNS}
-    return Recording(extra=extra, path=path, **known)
+    known = _parse_known_columns(path, names, columns, numbers)
+    _check_time(path, known["time"], numbers)
+    known.update({name: _parse_extra_column(columns[i]) for i, name in enumerate(names) if name not in KNOWN_COLUMNS})
+    return known, numbers
+
+
+@dataclass
+class Chunk:
+    """A block of consecutive samples of a recording, with their 1-based lines."""
+    recording: Recording
+    lines: np.ndarray
+
+
+_BLANK_LINE = re.compile(r"^[ \t\r]*\n", re.MULTILINE)  # a whitespace-only line
+CHUNK_ROWS = 1 << 16  # ~5 MB of text a block: memory stays flat whatever the file's length
+
+
+def iter_recording(path, rows: int = CHUNK_ROWS) -> Iterator[Chunk]:
+    """A recording block by block, with every check of ``read_recording``
+    (time increasing across blocks too); memory stays that of one block.
+
+    A malformed block raises RecordingError when it is reached, so a caller
+    that writes as it reads must write to a temporary file (as write_csv does).
+    """
+    path = os.fspath(path)
+    with _open(path) as f:
+        names = _read_header(path, f)
+        next_line, last, total = 2, None, 0
+        while lines := _read_lines(path, f, rows):
+            columns = _chunk_fast(names, lines)
+            numbers = np.arange(next_line, next_line + len(lines))
+            if columns is None:
+                columns, numbers = _chunk_checked(path, names, lines, next_line)
+            next_line += len(lines)
+            if len(numbers) == 0:
+                continue
+            time = columns["time"]
+            if last is not None and time[0] <= last[0]:
+                raise RecordingError(
+                    path, f"time {float(time[0])!r} is not after {last[0]!r} on line {last[1]} "
+                          "(time must be strictly increasing)", line=int(numbers[0]), column="time")
+            last = (float(time[-1]), int(numbers[-1]))
+            total += len(time)
+            known = {name: columns.pop(name) for name in KNOWN_COLUMNS if name in columns}
+            yield Chunk(Recording(extra=columns, path=path, **known), np.asarray(numbers))
+    if total < MIN_ROWS:
+        raise RecordingError(path, f"needs at least {MIN_ROWS} rows of data, found {total}")
+
+
+def _joined(parts: list[np.ndarray]) -> np.ndarray:
+    if len({p.dtype.kind for p in parts}) > 1:
+        # An extra column numeric in one block and text in another: text, as
+        # a one-block file would give (extras are kept, never checked).
+        parts = [p.astype(str) for p in parts]
+    return np.concatenate(parts)
 
 
 def read_recording(path) -> Recording:
     """Read a recording CSV; raise RecordingError if it is malformed."""
-    path = os.fspath(path)
-    text = _read_text(path)
-    rec = _load_fast(path, text)
-    return rec if rec is not None else _load_checked(path, text)
+    chunks = [c.recording for c in iter_recording(path)]
+    columns = {name: _joined([c.columns()[name] for c in chunks]) for name in chunks[0].columns()}
+    known = {name: columns.pop(name) for name in KNOWN_COLUMNS if name in columns}
+    return Recording(extra=columns, path=os.fspath(path), **known)
 
 
 # --------------------------------------------------------------------------
@@ -381,37 +427,81 @@ def _validated_columns(path, columns: Mapping[str, Iterable]) -> dict[str, list[
     return formatted
 
 
-def write_csv(path, columns: Mapping[str, Iterable]) -> None:
-    """Write named columns as a CSV with full float precision, atomically.
+class CsvWriter:
+    """A CSV written block by block into a temporary file next to PATH, which
+    replaces PATH in one step on success: readers never see a half-written
+    file, and on any error neither partial output nor the temporary file is
+    left. Errors name PATH, never the temporary file.
 
-    The data go to a temporary file in the same directory, which then
-    replaces ``path`` in one step: readers never see a half-written file, and
-    on any error neither partial output nor the temporary file is left.
+        with CsvWriter(path, names) as out:
+            out.write(columns)   # as often as needed
     """
+
+    def __init__(self, path, names: Sequence[str]):
+        self.path = os.fspath(path)
+        self.names = list(names)
+        directory = os.path.dirname(os.path.abspath(self.path))
+        self._tmp = os.path.join(directory, f".{os.path.basename(self.path)}.{secrets.token_hex(6)}.tmp")
+        try:
+            # O_EXCL: never clobber a stranger's file; 0o666 lets the umask
+            # decide the final permissions, as for a normally created file.
+            fd = os.open(self._tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+        except OSError as exc:
+            raise OSError(exc.errno, f"cannot write {self.path}: {exc.strerror or exc}") from None
+        self._file = open(fd, "w", newline="", encoding="utf-8")
+        self._writer = csv.writer(self._file, lineterminator="\n")
+        self._guard(self._writer.writerow, self.names)
+
+    def _guard(self, fn, *args):
+        try:
+            return fn(*args)
+        except OSError as exc:
+            self.discard()
+            raise OSError(exc.errno, f"cannot write {self.path}: {exc.strerror or exc}") from None
+
+    def write(self, columns: Mapping[str, Iterable]) -> None:
+        """Append rows: every name of the header, equal lengths."""
+        if list(columns) != self.names:
+            raise ValueError(f"{self.path}: columns {list(columns)} are not the header's {self.names}")
+        self.write_cells(_validated_columns(self.path, columns))
+
+    def write_cells(self, formatted: Mapping[str, list[str]]) -> None:
+        """Append rows already formatted by _validated_columns."""
+        self._guard(self._writer.writerows, zip(*formatted.values()))
+
+    def commit(self) -> None:
+        def finish():
+            self._file.flush()
+            os.fsync(self._file.fileno())
+            self._file.close()
+            os.replace(self._tmp, self.path)
+        self._guard(finish)
+
+    def discard(self) -> None:
+        self._file.close()
+        try:
+            os.unlink(self._tmp)
+        except FileNotFoundError:
+            pass
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, exc_type, exc, tb):
+        # BaseException too: a Ctrl-C mid-write must not leave the temp file.
+        if exc_type is None:
+            self.commit()
+        else:
+            self.discard()
+
+
+def write_csv(path, columns: Mapping[str, Iterable]) -> None:
+    """Write named columns as a CSV with full float precision, atomically (see CsvWriter)."""
     path = os.fspath(path)
     # Format everything first: most errors surface before touching the disk.
     formatted = _validated_columns(path, columns)
-    directory = os.path.dirname(os.path.abspath(path))
-    tmp = os.path.join(directory,
-                       f".{os.path.basename(path)}.{secrets.token_hex(6)}.tmp")
-    # O_EXCL: never clobber a stranger's file; 0o666 lets the umask decide
-    # the final permissions, as for a normally created file.
-    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
-    try:
-        with open(fd, "w", newline="", encoding="utf-8") as f:
-            writer = csv.writer(f, lineterminator="\n")
-            writer.writerow(formatted.keys())
-            writer.writerows(zip(*formatted.values()))
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        # BaseException: a Ctrl-C mid-write must not leave the temp file.
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
+    with CsvWriter(path, list(formatted)) as out:
+        out.write_cells(formatted)
 
 
 def write_recording(path, rec: Recording) -> None:

@@ -216,3 +216,20 @@ def test_ssp_keeps_to_the_subset_every_master_reads(name):
     for a, b, c, d in parsed.connections:
         assert kinds[(a, b)] == "output" and kinds[(c, d)] == "input"
     assert len({(c, d) for _, _, c, d in parsed.connections}) == len(parsed.connections)
+
+
+@pytest.mark.parametrize("name", cosim.SYSTEMS)
+def test_ssp_names_omsimulators_master_at_the_fmus_sample_period(name):
+    """OMSimulator refuses a system without its own FixedStepMaster annotation
+    (issue 12); the other masters ignore it (the tests above run the same files)."""
+    from hdjoint import parameters
+    with zipfile.ZipFile(cosim.ssp_path(name)) as z:
+        root = ET.fromstring(z.read("SystemStructure.ssd"))
+    ssd = "{http://ssp-standard.org/SSP1/SystemStructureDescription}"
+    ssc = "{http://ssp-standard.org/SSP1/SystemStructureCommon}"
+    oms = "{https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd}"
+    annotation = root.find(f"{ssd}System/{ssd}Annotations/{ssc}Annotation[@type='org.openmodelica']")
+    assert annotation is not None
+    master = annotation.find(f"{oms}Annotations/{oms}SimulationInformation/{oms}FixedStepMaster")
+    assert master is not None and master.get("description") == "oms-ma"
+    assert float(master.get("stepSize")) == parameters.table()["Ts"].default == STEP

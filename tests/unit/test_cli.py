@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import contextlib
-import csv
 import hashlib
 import io
 import json
@@ -20,60 +19,9 @@ from hdjoint.fmu_runner import run_estimator_fmu
 from hdjoint.fmus import FMU_NAMES, fmu_path
 from hdjoint.recording import read_recording
 
+from cli_helpers import assert_one_line_error, files_in, read_csv, rewrite, run_cli
+
 ESTIMATE_COLUMNS = ["time", "tau_ukf", "tau_compliance", "omega_m", "dtheta_f", "tau_ukf_std", "tau_hat", "tau_hat_std"]
-
-
-def read_csv(path):
-    """Header and float rows, read with the csv module (not hdjoint's reader)."""
-    with open(path, newline="") as f:
-        rows = list(csv.reader(f))
-    return rows[0], np.array(rows[1:], dtype=float)
-
-
-def run_cli(capsys, *argv):
-    code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def assert_one_line_error(err, *fragments):
-    text = err.strip()
-    assert text, "nothing on stderr"
-    assert "\n" not in text, f"more than one line on stderr:\n{err}"
-    for fragment in fragments:
-        assert fragment in text, f"{fragment!r} not in {text!r}"
-
-
-def files_in(directory):
-    return sorted(p.name for p in directory.iterdir())
-
-
-@pytest.fixture(scope="module")
-def simulated(tmp_path_factory):
-    """`hdjoint simulate --duration 2 -o rec.csv`, once for the module."""
-    d = tmp_path_factory.mktemp("sim")
-    path = d / "rec.csv"
-    assert main(["simulate", "--duration", "2", "-o", str(path)]) == 0
-    return path
-
-
-@pytest.fixture
-def rec_csv(simulated, tmp_path):
-    path = tmp_path / "rec.csv"
-    shutil.copyfile(simulated, path)
-    return path
-
-
-def rewrite(path, edit):
-    """Apply edit(header, rows) to a recording's text (rows are lists of cells)."""
-    with open(path, newline="") as f:
-        rows = list(csv.reader(f))
-    header, body = edit(rows[0], rows[1:])
-    with open(path, "w", newline="") as f:
-        w = csv.writer(f, lineterminator="\n")
-        w.writerow(header)
-        w.writerows(body)
-    return path
 
 
 # ---------------------------------------------------------------- fmus
