@@ -44,6 +44,7 @@ def _run(fleet, out, client, patterns=("logs/**/*.csv",), joint_pattern=r"logs/(
                      joint_pattern=joint_pattern, client=client, options={"engine": "fmu"}, show_progress=False)
 
 
+@pytest.mark.slow
 def test_fleet_estimates_equal_the_single_recording_command(fleet, two_workers, tmp_path, capsys):
     out = tmp_path / "out"
     summary = _run(fleet, out, two_workers)
@@ -76,6 +77,7 @@ def test_a_rerun_reuses_every_finished_result(fleet, two_workers, tmp_path):
     assert [r["key"] for r in again.rows] == [r["key"] for r in first.rows]
 
 
+@pytest.mark.slow
 def test_a_killed_run_restarts_where_it_stopped(fleet, two_workers, tmp_path):
     out = tmp_path / "out"
     rows_dir = out / store.ROWS
@@ -134,12 +136,14 @@ def _run_while_killing(fleet, client, out, times):
     return killed, result["summary"]
 
 
+@pytest.mark.slow
 def test_a_worker_killed_mid_run_is_retried(fleet, two_workers, tmp_path):
     killed, summary = _run_while_killing(fleet, two_workers, tmp_path / "out", times=1)
     assert killed == 1
     assert [r["status"] for r in summary.rows] == ["ok"], summary.rows
 
 
+@pytest.mark.slow
 def test_a_recording_that_keeps_killing_its_worker_is_marked_failed(fleet, two_workers, tmp_path):
     out = tmp_path / "out"
     killed, summary = _run_while_killing(fleet, two_workers, out, times=2)
