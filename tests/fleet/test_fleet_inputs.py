@@ -115,3 +115,20 @@ def test_trend_finds_a_growing_parameter_and_ranks_its_joint_first():
     assert ranked[0].joint == "drifting" and ranked[0].drifting
     assert (ranked[0].effect, ranked[0].direction) == ("coulomb_friction", "growing")
     assert 0.3 < ranked[0].strongest.change < 0.5
+
+
+def test_a_significant_but_tiny_trend_is_not_a_drift():
+    # +2 % over the period at p << 0.05: below the 10 % default, and below a
+    # stated tolerance; with a tolerance of 1 % of the value it is a drift.
+    def joint(tol=None):
+        found = []
+        for day in range(6):
+            row = {"joint": "j", "date": f"2026-01-0{day + 1}", "status": "ok",
+                   "param.Bm": 3e-5 * (1 + 0.004 * day + 1e-4 * (-1) ** day)}
+            if tol is not None:
+                row["param.Bm.tol"] = tol
+            found.append(row)
+        return trend.joint_trend("j", found)
+    tiny = joint()
+    assert tiny.strongest.p_value < 1e-4 and not tiny.drifting
+    assert not joint(tol=3e-6).drifting and joint(tol=3e-7).drifting

@@ -51,8 +51,10 @@ def _ranking(drifts) -> str:
             f"<p>Trend test: weighted least-squares slope t-test of each tracked quantity against time (weights "
             f"from the 95 % intervals when every point has one; residual scale from the scatter; two-sided, "
             f"n-2 degrees of freedom); a joint's p-value is its smallest one times the number of quantities "
-            f"tested (Bonferroni). Drifting: p &lt; {trend.ALPHA}, so a joint without drift is flagged with "
-            f"probability at most {trend.ALPHA:.0%} (measured false-alarm rate: docs/fleet.md).</p>"
+            f"tested (Bonferroni). Drifting: p &lt; {trend.ALPHA} and a change over the period of at least the "
+            f"parameter's tolerance (or {trend.RELEVANT_CHANGE:.0%} of its first value where none is stated), so "
+            f"a joint without drift is flagged with probability at most {trend.ALPHA:.0%} (measured false-alarm "
+            f"rate: docs/fleet.md).</p>"
             + _html_table(("rank", "joint", "drift p", "drifting", "effect", "quantity", "direction",
                            "change over the period (%)", "slope per day", "quantities tested"), body, marked))
 

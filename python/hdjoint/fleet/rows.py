@@ -35,16 +35,17 @@ def findings_of(doc: dict) -> list[dict]:
     return out
 
 
-def _interval(entry) -> tuple[float, float, float]:
-    """(estimate, lo, hi) from a calibration or finding entry: a dict or a bare number."""
+def _interval(entry) -> tuple[float, float, float, float]:
+    """(estimate, lo, hi, tolerance) from a calibration or finding entry: a dict or a bare number."""
     if isinstance(entry, dict):
         value = entry.get("estimate", entry.get("calibrated", entry.get("value")))
-        return _float(value), _float(entry.get("lo")), _float(entry.get("hi"))
-    return _float(entry), math.nan, math.nan
+        return _float(value), _float(entry.get("lo")), _float(entry.get("hi")), _float(entry.get("tolerance"))
+    return _float(entry), math.nan, math.nan, math.nan
 
 
 def parameter_columns(doc: dict) -> dict[str, float]:
-    """param.<name>, param.<name>.lo, param.<name>.hi for the corrected set;
+    """param.<name>, param.<name>.lo, param.<name>.hi (and param.<name>.tol,
+    the parameter's stated tolerance, where given) for the corrected set;
     intervals from the calibration, or from a finding that resized the parameter."""
     intervals = {}
     for f in doc.get("findings") or []:
@@ -55,11 +56,12 @@ def parameter_columns(doc: dict) -> dict[str, float]:
     cols = {}
     params = doc.get("params") or {}
     for name in dict.fromkeys(list(params) + list(intervals)):
-        value, lo, hi = intervals.get(name, (math.nan, math.nan, math.nan))
-        final = _float(params.get(name, value))
-        cols[f"param.{name}"] = final
+        value, lo, hi, tol = intervals.get(name, (math.nan, math.nan, math.nan, math.nan))
+        cols[f"param.{name}"] = _float(params.get(name, value))
         cols[f"param.{name}.lo"] = lo
         cols[f"param.{name}.hi"] = hi
+        if math.isfinite(tol):
+            cols[f"param.{name}.tol"] = tol
     return cols
 
 

@@ -23,6 +23,11 @@ from scipy import stats
 from ..effects import EFFECTS, KINEMATIC_EQ7
 
 ALPHA = 0.05
+# A drift matters when the fitted change over the observed period reaches the
+# parameter's stated tolerance (the diagnosis' `tolerance`), or this share of
+# its first value where none is stated: a significant but tiny trend is not
+# a joint to service.
+RELEVANT_CHANGE = 0.10
 Z95 = stats.norm.ppf(0.975)
 KINEMATIC_AMPLITUDE = "kinematic_error_amplitude"
 # What is followed over time, in the order the report shows it.
@@ -45,9 +50,10 @@ class Trend:
     quantity: str
     n: int
     slope_per_day: float
-    change: float      # fitted change over the observed span, relative to the first fitted value
+    change: float      # fitted change over the observed span, relative to the first value
     t: float
     p_value: float     # two-sided, of this quantity alone
+    relevant: bool     # the change reaches the tolerance (or RELEVANT_CHANGE)
 
 
 @dataclass(frozen=True)
@@ -148,20 +154,24 @@ def joint_trend(joint: str, joint_rows: list[dict]) -> JointDrift:
             continue
         slope, t, p = result
         first = v[keep, 0][np.argmin(days[keep])]
-        span = np.ptp(days[keep])
-        trends.append(Trend(name, int(keep.sum()), slope, slope * span / abs(first) if first else math.nan, t, p))
+        moved = abs(slope) * np.ptp(days[keep])
+        tolerance = np.nanmedian([_get(r, f"param.{name}.tol") for r in ok]) if any(
+            f"param.{name}.tol" in r for r in ok) else math.nan
+        threshold = tolerance if math.isfinite(tolerance) and tolerance > 0 else RELEVANT_CHANGE * abs(first)
+        trends.append(Trend(name, int(keep.sum()), slope, math.copysign(moved, slope) / abs(first) if first
+                            else math.nan, t, p, bool(moved >= threshold)))
     if not trends:
         return JointDrift(joint, math.nan, False, None, ())
-    strongest = min(trends, key=lambda tr: (tr.p_value, -abs(tr.t)))
+    strongest = min(trends, key=lambda tr: (not tr.relevant, tr.p_value, -abs(tr.t)))
     p = min(1.0, strongest.p_value * len(trends))
-    return JointDrift(joint, p, p < ALPHA, strongest, tuple(trends))
+    return JointDrift(joint, p, p < ALPHA and strongest.relevant, strongest, tuple(trends))
 
 
 def rank_joints(all_rows: list[dict]) -> list[JointDrift]:
-    """Every joint, most significant drift first (ties: larger |t| first)."""
+    """Every joint: the drifting ones first, each group by drift p-value (ties: larger |t| first)."""
     by_joint: dict[str, list[dict]] = {}
     for r in all_rows:
         by_joint.setdefault(str(r.get("joint")), []).append(r)
     drifts = [joint_trend(j, rs) for j, rs in by_joint.items()]
-    return sorted(drifts, key=lambda d: (math.isnan(d.p_value), d.p_value,
+    return sorted(drifts, key=lambda d: (not d.drifting, math.isnan(d.p_value), d.p_value,
                                          -abs(d.strongest.t) if d.strongest else 0.0, d.joint))
