@@ -132,3 +132,14 @@ def test_a_significant_but_tiny_trend_is_not_a_drift():
     tiny = joint()
     assert tiny.strongest.p_value < 1e-4 and not tiny.drifting
     assert not joint(tol=3e-6).drifting and joint(tol=3e-7).drifting
+
+
+def test_the_command_line_names_bad_input_in_one_line(tree, capsys):
+    from hdjoint import cli
+    (tree / "map.json").write_text(json.dumps({"logs/r1/j1/*.csv": "p/j1.json"}))
+    code = cli.main(["fleet", "estimate", str(tree / "logs/**/*.csv"), "--params-map", str(tree / "map.json"),
+                     "--out", str(tree / "out")])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1
+    assert err.startswith("hdjoint fleet:") and "2026-01-01.csv: no pattern of the params map matches" in err
+    assert not (tree / "out").exists()

@@ -102,11 +102,10 @@ def compute(client, command: str, jobs: list[Job], keys: list[str], out: str, op
     found = []
     for f in as_completed(list(futures)):
         job, key = futures.pop(f)
-        if f.status == "error":
-            e = f.exception()
-            row = _failed_row(command, job, key, f"{type(e).__name__}: {e}")
-        else:
+        try:
             row = f.result()
+        except Exception as e:  # KilledWorker after allowed-failures deaths, or cancelled: not stored, retried next run
+            row = _failed_row(command, job, key, f"{type(e).__name__}: {e}")
         f.release()
         found.append(row)
         progress.update(row["status"] != "ok")
