@@ -119,6 +119,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("demo", help="the main job on built-in data: FMUs, estimation, paper table, report")
     p.add_argument("--out", default="hdjoint-demo", help="output directory (default: hdjoint-demo)")
     p.set_defaults(run=cmd_demo)
+
+    from .fleet.cli import register as register_fleet
+    register_fleet(sub)
     return ap
 
 

@@ -1,0 +1,76 @@
+"""`hdjoint fleet diagnose|estimate|generate`: registered on the main
+command line by `register`, implemented in this package."""
+from __future__ import annotations
+
+import sys
+
+
+def _common(p) -> None:
+    p.add_argument("recordings", nargs="+", metavar="GLOB",
+                   help='recordings: files or glob patterns, quoted ("logs/**/*.csv"; ** spans folders)')
+    p.add_argument("--params-map", metavar="MAP",
+                   help="JSON object from glob patterns (relative to MAP's folder) to parameter files; first "
+                        "match wins; the matched pattern is the joint id (default: each recording's folder, "
+                        "with the default parameters)")
+    p.add_argument("--joint-pattern", metavar="REGEX",
+                   help="regex on the recording's path relative to MAP's folder with named groups 'joint' "
+                        "and optionally 'date' (default date: the file's modification time)")
+    p.add_argument("--out", required=True, metavar="DIR", help="fleet.parquet, fleet.html and DIR/<joint>/<recording>/")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--scheduler", metavar="ADDR", help="a running Dask scheduler (tcp://host:8786)")
+    where.add_argument("--workers", type=int, metavar="N",
+                       help="worker processes of the local cluster (default: one per core)")
+    p.add_argument("--allowed-failures", type=int, default=None, metavar="K",
+                   help="worker deaths one recording may cause before it is marked failed (local cluster; "
+                        "default 2)")
+    p.add_argument("--quiet", action="store_true", help="no progress line")
+
+
+def cmd_fleet(args) -> int:
+    from ..jobs import UserError
+    from .run import ALLOWED_FAILURES, run_fleet
+    if args.workers is not None and args.workers < 1:
+        raise UserError(f"--workers must be at least 1, not {args.workers}")
+    options = {"engine": args.engine} if args.fleet_command == "estimate" else {}
+    summary = run_fleet(args.fleet_command, args.recordings, args.out, params_map=args.params_map,
+                        joint_pattern=args.joint_pattern, scheduler=args.scheduler, workers=args.workers,
+                        options=options, show_progress=not args.quiet,
+                        allowed_failures=ALLOWED_FAILURES if args.allowed_failures is None else args.allowed_failures)
+    print(f"{len(summary.rows)} recordings: {summary.computed} processed now, {summary.cached} done earlier, "
+          f"{summary.failed} failed; wrote {summary.parquet} and {summary.html}")
+    from .trend import rank_joints
+    for d in rank_joints(summary.rows)[:5]:
+        if d.drifting:
+            print(f"  drifting: {d.joint}: {d.effect} {d.direction} ({d.strongest.quantity} "
+                  f"{100 * d.strongest.change:+.0f} % over the period, p = {d.p_value:.2g})")
+    return 0
+
+
+def cmd_generate(args) -> int:
+    from .generate import JOINT_PATTERN, generate
+    path = generate(args.out, joints=args.joints, days=args.days, duration=args.duration,
+                    progress=lambda m: print(f"[generate] {m}", file=sys.stderr, flush=True))
+    print(f"wrote {args.joints} joints x {args.days} days under {args.out}; params map {path}")
+    print(f"try: hdjoint fleet diagnose '{args.out}/logs/**/*.csv' --params-map {path} "
+          f"--joint-pattern '{JOINT_PATTERN}' --out FLEET")
+    return 0
+
+
+def register(sub) -> None:
+    """Add `fleet` and its subcommands to the main parser's subparsers."""
+    fleet = sub.add_parser("fleet", help="diagnose or estimate a fleet of recordings on Dask; fleet drift report")
+    fsub = fleet.add_subparsers(dest="fleet_command", required=True)
+    p = fsub.add_parser("diagnose", help="diagnose every recording (findings, corrected parameters, report each)")
+    _common(p)
+    p.set_defaults(run=cmd_fleet)
+    p = fsub.add_parser("estimate", help="torque estimates for every recording (and error figures vs the sensor)")
+    _common(p)
+    p.add_argument("--engine", choices=("fmu", "batch"), default="fmu",
+                   help="JointTorqueEstimator.fmu through fmpy (default) or the native batch path")
+    p.set_defaults(run=cmd_fleet)
+    p = fsub.add_parser("generate", help="simulate a fleet with known drifts (for trying the fleet commands)")
+    p.add_argument("out", help="target directory")
+    p.add_argument("--joints", type=int, default=4)
+    p.add_argument("--days", type=int, default=6)
+    p.add_argument("--duration", type=float, default=20.0, help="seconds per recording")
+    p.set_defaults(run=cmd_generate)
