@@ -25,6 +25,9 @@ class Form:
     integrator: str = "semi_implicit"  # "semi_implicit" (linearly implicit Euler) or "heun"
     substeps: int = 5               # integration steps per controller sample
     extra_kinematic: list = field(default_factory=list)  # [(angle "m"|"l", order, a, b), ...]
+    # Outside the diagnosis' named library (for the open-library fallback):
+    friction_ripple: tuple = ()     # (order, r): friction level times 1 + r*cos(order*theta_m)
+    kinematic_torque: tuple = ()    # (order, c): theta_err += c*tau_f*cos(order*theta_m), rad per N.m
 
 
 def kinematic_terms(p: dict, form: Form) -> list[tuple[bool, float, float, float]]:
@@ -91,9 +94,13 @@ def stribeck_shape(form: Form, omega: float, omega_s: float) -> float:
     return math.exp(-x * x) if form.stribeck == "gauss" else math.exp(-abs(x))
 
 
-def friction_level(p: dict, form: Form, omega: float, t: float) -> float:
-    """Coulomb plus Stribeck level g(omega) > 0, with the warm-up when friction warms."""
+def friction_level(p: dict, form: Form, omega: float, t: float, theta_m: float = 0.0) -> float:
+    """Coulomb plus Stribeck level g(omega) > 0, with the warm-up when friction warms
+    and the position ripple when the form has one."""
     g = p["Fc"] + p.get("Fs", 0.0) * stribeck_shape(form, omega, p.get("omega_s", 10.0))
+    if form.friction_ripple:
+        order, r = form.friction_ripple
+        g *= 1.0 + r * math.cos(order * theta_m)
     return g * thermal_factor(p, t) if form.thermal == "friction" else g
 
 

@@ -87,8 +87,12 @@ class _Plant:
 
     def elastic(self) -> float:
         """Eq. (3)/(4)/(6): elastic torsion at the current state (wave generator loaded by the last tau_f)."""
-        return (self.theta_m / self.N - self.theta_l - physics.wave_generator_torsion(self.p, self.tau_f / self.N)
-                - physics.kinematic_sum(self.a0, self.kinematic, self.theta_m, self.theta_l))
+        x = (self.theta_m / self.N - self.theta_l - physics.wave_generator_torsion(self.p, self.tau_f / self.N)
+             - physics.kinematic_sum(self.a0, self.kinematic, self.theta_m, self.theta_l))
+        if self.form.kinematic_torque:
+            order, c = self.form.kinematic_torque
+            x -= c * self.tau_f * math.cos(order * self.theta_m)
+        return x
 
     def transmitted(self) -> float:
         """tau_f at the current state: eq. (8) on the elastic torsion past any lost motion, plus the
@@ -114,7 +118,7 @@ class _Plant:
     def _motor_friction(self, t: float) -> tuple[float, float]:
         """(friction torque, its slope in omega_m) of the tanh law, Bm included."""
         f = self.form
-        g = physics.friction_level(self.p, f, self.omega_m, t)
+        g = physics.friction_level(self.p, f, self.omega_m, t, self.theta_m)
         th = math.tanh(self.omega_m / f.omega_fc)
         return g * th + self.Bm * self.omega_m, g / f.omega_fc * (1.0 - th * th) + self.Bm
 
@@ -132,7 +136,7 @@ class _Plant:
             return
         if f.friction == "lugre":
             s0, s1 = f.lugre_sigma0, f.lugre_sigma1
-            g = physics.friction_level(p, f, self.omega_m, t)
+            g = physics.friction_level(p, f, self.omega_m, t, self.theta_m)
             zdot = self.omega_m - s0 * abs(self.omega_m) * self.z_fric / g
             fric, c_m = s0 * self.z_fric + s1 * zdot + self.Bm * self.omega_m, s1 + self.Bm + s0 * h
         else:
@@ -140,7 +144,7 @@ class _Plant:
         wm = self.omega_m + h * (drive - fric - tau_f / self.N) / self.Jm / (1.0 + h * c_m / self.Jm)
         wl = self.omega_l + h * (tau_f - load) / self.Jl / (1.0 + h * c_l / self.Jl)
         if f.friction == "lugre":
-            g = physics.friction_level(p, f, wm, t)
+            g = physics.friction_level(p, f, wm, t, self.theta_m)
             self.z_fric = (self.z_fric + h * wm) / (1.0 + h * f.lugre_sigma0 * abs(wm) / g)
         self.omega_m, self.omega_l = wm, wl
         self.theta_m += h * wm
