@@ -82,12 +82,13 @@ def nominal_for(case: TruthCase) -> dict:
     return dict(parameters.defaults(), wg_load=1.0, **case.nominal_off)
 
 
-def _draw_form(rng, present) -> Form:
+def _draw_form(rng, present, rotor_inertia: float) -> Form:
     lugre = rng.random() < 0.3 or "coulomb_friction" in present and rng.random() < 0.5
     form = Form(friction="lugre" if lugre else "tanh", omega_fc=float(np.exp(rng.uniform(np.log(0.1), np.log(2.0)))),
                 stribeck=str(rng.choice(["gauss", "exp"])))
     form.lugre_sigma0 = float(rng.uniform(200.0, 1000.0))
-    form.lugre_sigma1 = float(rng.uniform(0.5, 1.0) * 2.0 * np.sqrt(form.lugre_sigma0 * 2.09e-5))
+    # Bristle damping 0.5-1x critical on the rotor's nominal inertia.
+    form.lugre_sigma1 = float(rng.uniform(0.5, 1.0) * 2.0 * np.sqrt(form.lugre_sigma0 * rotor_inertia))
     if not lugre and form.omega_fc >= 0.5 and rng.random() < 0.4:
         form.integrator, form.substeps = "heun", int(rng.choice([5, 8]))
     else:
@@ -160,7 +161,7 @@ def draw(case: TruthCase, seed: int, duration: float = 30.0, recordings: int = 2
     for name in JITTERED:
         truth[name] *= float(1.0 + rng.uniform(-NOMINAL_ERROR, NOMINAL_ERROR))
     truth["Df"] = float(rng.uniform(2.0, 8.0))  # structural damping: the nominal model has none
-    form = _draw_form(rng, case.present)
+    form = _draw_form(rng, case.present, nominal["Jm"])
     sensor = CurrentSensor(gain_error=float(rng.uniform(-0.02, 0.02)), offset=float(rng.uniform(-0.01, 0.01)),
                            white=float(rng.uniform(0.005, 0.015)), coloured=float(rng.uniform(0.0, 0.01)),
                            colour_time=float(rng.uniform(0.005, 0.05)))

@@ -48,8 +48,8 @@ class Setup:
     motor_encoder: Encoder = field(default_factory=lambda: Encoder(4096.0))
     link_encoder: Encoder = field(default_factory=lambda: Encoder(524288.0))
     current_sensor: CurrentSensor = field(default_factory=CurrentSensor)
-    torque_noise: float = 0.02               # N.m, std of the torque sensor (None: no sensor column)
-    with_torque_sensor: bool = True
+    torque_noise: float = 0.02               # N.m, std of the torque sensor
+    with_torque_sensor: bool = True          # False: the recording has no tau_sensor column
     jitter: float = 0.0                      # s, samples taken up to this late
     stamp_actual_times: bool = False         # log the jittered instants (else the nominal ones)
     seed: int = 1
