@@ -75,18 +75,24 @@ def run_case(case: TruthCase, seed: int, duration: float) -> dict:
 
 
 def load_results(path: Path = RESULTS) -> list[dict]:
+    """Every case-seed's row, the first one where parts run side by side did one twice."""
     if not path.exists():
         return []
-    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+    rows = {}
+    for line in path.read_text().splitlines():
+        if line.strip():
+            row = json.loads(line)
+            rows.setdefault((row["case"], row["seed"], row["duration"]), row)
+    return list(rows.values())
 
 
 def run(seeds: list[int], duration: float, only: str | None, which: str, path: Path = RESULTS) -> None:
-    done = {(r["case"], r["seed"], r["duration"]) for r in load_results(path)}
     cases = (EFFECT_CASES if which in ("all", "effects") else []) + \
         (CONTROL_CASES if which in ("all", "controls") else [])
     path.parent.mkdir(parents=True, exist_ok=True)
     for seed in seeds:
         for case in cases:
+            done = {(r["case"], r["seed"], r["duration"]) for r in load_results(path)}  # other parts may run too
             if only and only not in case.name or (case.name, seed, duration) in done:
                 continue
             row = run_case(case, seed, duration)
