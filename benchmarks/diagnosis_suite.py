@@ -6,6 +6,12 @@ diagnose it against the nominal model, and print
   - held-out improvement of the named findings,
   - the time per case.
 Run: python benchmarks/diagnosis_suite.py [--duration 30] [--markdown]
+
+--independent: the same questions on an independent truth (hdjoint.truth,
+not the project's own joint), several seeds, closure on a second recording;
+see diagnosis_independent.py. Resumable and splittable:
+  python benchmarks/diagnosis_suite.py --independent --seeds 3 [--cases NAME] [--which controls]
+writes docs/results/diagnosis_independent.md (and .jsonl, the raw results).
 """
 from __future__ import annotations
 
@@ -31,7 +37,21 @@ def main():
     ap.add_argument("--duration", type=float, default=30.0, help="seconds per recording")
     ap.add_argument("--only", help="run only cases whose name contains this")
     ap.add_argument("--save", type=pathlib.Path, help="write each case's findings.json into this folder")
+    ap.add_argument("--independent", action="store_true", help="run on the independent truth (hdjoint.truth)")
+    ap.add_argument("--seeds", type=int, default=3, help="--independent: seeds 0..SEEDS-1")
+    ap.add_argument("--first-seed", type=int, default=0, help="--independent: start at this seed")
+    ap.add_argument("--cases", help="--independent: run only cases whose name contains this")
+    ap.add_argument("--which", choices=("all", "effects", "controls"), default="all",
+                    help="--independent: effect cases, controls, or both")
+    ap.add_argument("--table-only", action="store_true", help="--independent: rebuild the table from the results")
     args = ap.parse_args()
+    if args.independent:
+        import diagnosis_independent as independent
+        if not args.table_only:
+            independent.run(list(range(args.first_seed, args.first_seed + args.seeds)), args.duration, args.cases,
+                            args.which)
+        print(independent.write_table(independent.load_results()))
+        return
     rows = []
     for case in CASES:
         if args.only and args.only not in case.name:

@@ -462,6 +462,9 @@ def _diagnose(rec: Recording, nominal: dict[str, float], progress: Callable[[str
     p = diag.select(p)
     diag.say("checking what remains")
     doc = document(diag, p, remaining_structure(diag, p))
+    if doc["unexplained"]:  # open-library fallback: propose terms for what no named effect explains
+        from .open_library import propose_terms
+        doc["proposed_terms"] = propose_terms(diag, p, doc["unexplained"])
     doc["located"] = located
     doc["seconds"] = round(_time.perf_counter() - diag.started, 2)
     return diag, doc

@@ -1,0 +1,188 @@
+"""The diagnosis on an independent truth (hdjoint.truth: Python, not the
+project's C++ joint, with its model form drawn per seed): every effect ID
+concealed one, two or three at a time, controls on every excitation kind,
+and closure: the corrected params.json used as the nominal set for a second
+recording of the same joint with another excitation.
+
+Each run goes through `hdjoint diagnose` (jobs.diagnose_to_directory) on CSV
+files. Results are appended to a JSON-lines file, one line per case and
+seed, so the run can be split (--cases, --seeds, --controls/--effects) and
+resumed; the Markdown table is rebuilt from all lines every time.
+Called by diagnosis_suite.py --independent."""
+from __future__ import annotations
+
+import json
+import os
+import platform
+import subprocess
+import tempfile
+import time
+from datetime import datetime, timezone
+from pathlib import Path
+
+from hdjoint import parameters
+from hdjoint.jobs import diagnose_to_directory
+from hdjoint.recording import write_recording
+from hdjoint.truth.cases import CONTROL_CASES, EFFECT_CASES, TruthCase, draw, record
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "docs" / "results" / "diagnosis_independent.jsonl"
+TABLE = ROOT / "docs" / "results" / "diagnosis_independent.md"
+GOALS = {"false_alarms": 0.05, "named_first": 0.90, "closure": 0.90}
+
+
+def _named(finding: dict) -> set[str]:
+    """Effects a finding names: itself, or every member of a look-alike set."""
+    return {finding["effect"]} | {a["effect"] for a in finding.get("alternatives") or []}
+
+
+def _summary(doc: dict) -> dict:
+    return {"verdict": doc["verdict"], "seconds": doc.get("seconds"),
+            "findings": [{"effect": f["effect"], "kind": f.get("kind", "added"),
+                          "named": sorted(_named(f)), "p_value": f.get("p_value")} for f in doc["findings"]],
+            "unexplained": len(doc.get("unexplained") or []),
+            "proposed_terms": [t.get("terms") for t in doc.get("proposed_terms") or []]}
+
+
+def _diagnose(rec, params_path: Path, out: Path) -> tuple[dict, float]:
+    csv = out.with_suffix(".csv")
+    write_recording(csv, rec)
+    start = time.perf_counter()
+    doc = diagnose_to_directory(str(csv), str(params_path), str(out))
+    return doc, time.perf_counter() - start
+
+
+def run_case(case: TruthCase, seed: int, duration: float) -> dict:
+    joint = draw(case, seed, duration)
+    row = {"case": case.name, "present": list(case.present), "seed": seed, "duration": duration,
+           "form": joint.description, "runs": []}
+    with tempfile.TemporaryDirectory(prefix="hdjoint-independent-") as tmp:
+        tmp = Path(tmp)
+        nominal = tmp / "nominal.json"
+        parameters.save(nominal, joint.nominal)
+        for index in range(len(joint.setups)):
+            start = time.perf_counter()
+            rec = record(joint, index)
+            simulated = time.perf_counter() - start
+            # A control's second recording is another control run; an effect
+            # case's is diagnosed against the first one's corrected set (closure).
+            params = nominal if not case.present or index == 0 else tmp / "run0" / "params.json"
+            doc, wall = _diagnose(rec, params, tmp / f"run{index}")
+            row["runs"].append(dict(_summary(doc), excitation=joint.setups[index].excitation,
+                                    simulate_seconds=round(simulated, 1), wall_seconds=round(wall, 1),
+                                    nominal=("nominal" if params == nominal else "corrected by run 0")))
+    return row
+
+
+def load_results(path: Path = RESULTS) -> list[dict]:
+    """Every case-seed's row, the first one where parts run side by side did one twice."""
+    if not path.exists():
+        return []
+    rows = {}
+    for line in path.read_text().splitlines():
+        if line.strip():
+            row = json.loads(line)
+            rows.setdefault((row["case"], row["seed"], row["duration"]), row)
+    return list(rows.values())
+
+
+def run(seeds: list[int], duration: float, only: str | None, which: str, path: Path = RESULTS) -> None:
+    cases = (EFFECT_CASES if which in ("all", "effects") else []) + \
+        (CONTROL_CASES if which in ("all", "controls") else [])
+    path.parent.mkdir(parents=True, exist_ok=True)
+    for seed in seeds:
+        for case in cases:
+            done = {(r["case"], r["seed"], r["duration"]) for r in load_results(path)}  # other parts may run too
+            if only and only not in case.name or (case.name, seed, duration) in done:
+                continue
+            row = run_case(case, seed, duration)
+            with path.open("a") as f:
+                f.write(json.dumps(row) + "\n")
+            first = row["runs"][0]
+            print(f"seed {seed} {case.name:<52} {first['verdict']:<16} "
+                  f"{[f['effect'] for f in first['findings']] or '-'}  ({first['wall_seconds']} s)", flush=True)
+            write_table(load_results(path))
+
+
+def _machine() -> str:
+    cpu = next((line.split(":", 1)[1].strip() for line in Path("/proc/cpuinfo").read_text().splitlines()
+                if line.startswith("model name")), platform.processor()) if Path("/proc/cpuinfo").exists() else ""
+    return f"{platform.node()}, {cpu}, {os.cpu_count()} cores, Python {platform.python_version()}"
+
+
+def _commit() -> str:
+    try:
+        return subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
+                              text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def _pct(hits: int, total: int) -> str:
+    return f"{hits}/{total} ({100 * hits / total:.0f} %)" if total else "-"
+
+
+def write_table(rows: list[dict], path: Path = TABLE) -> str:
+    controls = [run for r in rows if not r["present"] for run in r["runs"]]
+    single = [r for r in rows if len(r["present"]) == 1]
+    multi = [r for r in rows if len(r["present"]) > 1]
+    first_named = lambda r: bool(r["runs"][0]["findings"]) and r["present"][0] in r["runs"][0]["findings"][0]["named"]  # noqa: E731
+    named_all = lambda r: set(r["present"]) <= {e for f in r["runs"][0]["findings"] for e in f["named"]}  # noqa: E731
+    closure_rows = [r for r in rows if r["present"] and len(r["runs"]) > 1]
+    closed = lambda r: r["runs"][1]["verdict"] == "consistent"  # noqa: E731
+    alarms = sum(run["verdict"] != "consistent" for run in controls)
+    times = [run["seconds"] for r in rows for run in r["runs"] if run.get("seconds") is not None]
+    sims = [run["simulate_seconds"] for r in rows for run in r["runs"]]
+    seeds = sorted({r["seed"] for r in rows})
+    durations = sorted({r["duration"] for r in rows})
+    lines = [
+        "# Diagnosis on an independent truth",
+        "",
+        f"Generated by `python benchmarks/diagnosis_suite.py --independent` on "
+        f"{datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC, commit {_commit()}, machine {_machine()}.",
+        f"Seeds {seeds}, recordings of {', '.join(f'{d:g}' for d in durations)} s. "
+        "How the truth is built: docs/benchmarks.md. Raw results: diagnosis_independent.jsonl.",
+        "",
+        "| goal (issue 10) | measured | goal |",
+        "|---|---|---|",
+        f"| false alarms on controls (verdict not `consistent`) | {_pct(alarms, len(controls))} | "
+        f"<= {100 * GOALS['false_alarms']:.0f} % over >= 40 runs |",
+        f"| single effect named first (added, resized or in a look-alike set) | "
+        f"{_pct(sum(map(first_named, single)), len(single))} | >= {100 * GOALS['named_first']:.0f} % |",
+        f"| several effects: all named | {_pct(sum(map(named_all, multi)), len(multi))} | all |",
+        f"| closure: corrected set `consistent` on the second recording | "
+        f"{_pct(sum(map(closed, closure_rows)), len(closure_rows))} | >= {100 * GOALS['closure']:.0f} % |",
+        f"| diagnosis time per recording (mean / max) | "
+        f"{(sum(times) / len(times)) if times else 0:.1f} / {max(times, default=0):.1f} s | <= 20 s per 58 s |",
+        f"| truth simulation per recording (mean / max) | "
+        f"{(sum(sims) / len(sims)) if sims else 0:.1f} / {max(sims, default=0):.1f} s | <= 10 s per 30 s |",
+        "",
+        "## Per effect (first recording against the nominal set; closure on the second)",
+        "",
+        "| case | runs | named first | named anywhere | closure | what was named first (per seed) |",
+        "|---|---|---|---|---|---|",
+    ]
+    for name in dict.fromkeys(r["case"] for r in rows if r["present"]):
+        group = [r for r in rows if r["case"] == name]
+        firsts = "; ".join(f"s{r['seed']}: " + (f"{r['runs'][0]['findings'][0]['effect']} "
+                                               f"({r['runs'][0]['findings'][0]['kind']})"
+                                               if r["runs"][0]["findings"] else r["runs"][0]["verdict"])
+                           for r in group)
+        first = sum(map(first_named, group)) if len(group[0]["present"]) == 1 else "-"
+        lines.append(f"| {name} | {len(group)} | {first} | {sum(map(named_all, group))} | "
+                     f"{sum(map(closed, [r for r in group if len(r['runs']) > 1]))} | {firsts} |")
+    lines += ["", "## Controls (nothing missing), per excitation", "",
+              "| excitation | runs | false alarms | verdicts and first findings |", "|---|---|---|---|"]
+    by_kind: dict[str, list] = {}
+    for r in rows:
+        if not r["present"]:
+            for run in r["runs"]:
+                by_kind.setdefault(run["excitation"], []).append(run)
+    for kind, runs in by_kind.items():
+        said = "; ".join(run["verdict"] + (f" ({run['findings'][0]['effect']})" if run["findings"] else "")
+                         for run in runs if run["verdict"] != "consistent") or "all consistent"
+        lines.append(f"| {kind} | {len(runs)} | {sum(run['verdict'] != 'consistent' for run in runs)} | {said} |")
+    text = "\n".join(lines) + "\n"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text)
+    return text

@@ -1,0 +1,216 @@
+"""The diagnosis on the real LARA8 recordings (../shared/data/lara8, see its
+README): what each recording contains (and so what it can say), the
+verdict and findings, where the kinematic error (the thesis' dominant
+effect) ends up, and the torsion residual on ANOTHER recording of the same
+joint before and after (validation.validate, as `hdjoint diagnose
+--validate`, with each set's encoder zero a0 placed on that recording). Joint 1 has two
+recordings, each validated on the other; joints 2 and 3 have one, so each is
+diagnosed on its first half and validated on its second half (said so in
+the table).
+
+The nominal set per joint: the contract defaults with the README's
+Kt = 0.1 N.m/A, the gear ratio fitted to the two encoders, the catalogue
+stiffness of a size-25 gear (K1 = 31000 N.m/rad; Cf from K1/K2 at T1/T2
+through eq. (5)), and no gravity (mgl = 0: the diagnosis may add it).
+Run: python benchmarks/lara8_table.py [--data DIR]  -> docs/results/lara8.md
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import tempfile
+from datetime import datetime, timezone
+from pathlib import Path
+
+import numpy as np
+from scipy.optimize import brentq
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from diagnosis_independent import _commit, _machine  # noqa: E402  (the same stamp on every table)
+
+from hdjoint import parameters  # noqa: E402
+from hdjoint.diagnosis import Diagnosis  # noqa: E402
+from hdjoint.effects import KINEMATIC_EQ7  # noqa: E402
+from hdjoint.jobs import UserError, diagnose_to_directory  # noqa: E402
+from hdjoint.recording import read_recording, write_recording  # noqa: E402
+from hdjoint.signals import kinematics  # noqa: E402
+from hdjoint.validation import validate  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+# ../shared/data/lara8 beside the main checkout (a worktree sits one level deeper).
+DATA = next((d for d in (ROOT.parent / "shared/data/lara8", ROOT.parent.parent / "shared/data/lara8") if d.is_dir()),
+            ROOT.parent / "shared/data/lara8")
+TABLE = ROOT / "docs" / "results" / "lara8.md"
+KT = 0.1                          # N.m/A, the README's convention for these files
+K1, K2, T1, T2 = 31000.0, 50000.0, 14.0, 48.0  # catalogue, size-25 gear (thesis)
+JOINTS = {"joint1": ["joint1_jog.csv", "joint1_jog_linear_mass.csv"], "joint2": ["joint2_jog_joint_mass.csv"],
+          "joint3": ["joint3_jog_linear_mass.csv"]}
+
+
+def catalogue_cf() -> float:
+    """Cf of eq. (5) through the catalogue's torsion at T2 (piecewise K1, K2), with Kf = K1."""
+    torsion_t2 = T1 / K1 + (T2 - T1) / K2
+    return brentq(lambda cf: math.atan(cf * T2) / (cf * K1) - torsion_t2, 1e-6, 10.0)
+
+
+def gear_ratio(rec) -> float:
+    return float(np.polyfit(rec.theta_l, rec.theta_m, 1)[0])
+
+
+def _reversals(x, threshold) -> int:
+    s = np.sign(x[np.abs(x) > threshold])
+    return int(np.count_nonzero(np.diff(s)))
+
+
+def contents(rec, n: float) -> dict:
+    """What the recording holds, and what it therefore cannot say."""
+    kin = kinematics(rec, sigma_s=0.02)
+    torque = rec.i_m * n * KT
+    info = {"duration_s": round(rec.duration, 2), "samples": len(rec),
+            "median_step_ms": round(1e3 * float(np.median(np.diff(rec.time))), 2),
+            "motor_revolutions": round(float(np.ptp(rec.theta_m)) / (2 * math.pi), 2),
+            "link_travel_rad": round(float(np.ptp(rec.theta_l)), 3),
+            "motor_reversals": _reversals(kin.omega_m, 0.5), "link_reversals": _reversals(kin.omega_l, 0.005),
+            "torque_range_Nm": [round(float(np.percentile(torque, 2)), 1), round(float(np.percentile(torque, 98)), 1)]}
+    limits = []
+    if info["motor_revolutions"] < 2:
+        limits.append("the motor turns less than two revolutions: motor-angle kinematic-error orders cannot be "
+                      "told from a slow drift")
+    if info["link_travel_rad"] < 2 * math.pi:
+        limits.append(f"the link travels {info['link_travel_rad']} rad, a fraction of a revolution: link-angle "
+                      "orders of the kinematic error are confounded with the offset and gravity")
+    if info["motor_reversals"] < 2:
+        limits.append("the motor reverses fewer than twice: friction and hysteresis are not testable")
+    if min(abs(t) for t in info["torque_range_Nm"]) > 0 and np.sign(info["torque_range_Nm"][0]) == \
+            np.sign(info["torque_range_Nm"][1]):
+        limits.append("the load never changes sign: hysteresis, backlash and the stiffness law's symmetry cannot be seen")
+    if info["duration_s"] < 10:
+        limits.append(f"{info['duration_s']} s is too short for drifts")
+    info["cannot_say"] = limits
+    return info
+
+
+def nominal_for(n: float) -> dict:
+    return dict(parameters.defaults(), N=n, Kt=KT, Kf=K1, Cf=catalogue_cf(), mgl=0.0, jsf_mgl=0.0)
+
+
+def validate_with_own_zero(rec, nominal: dict, calibration: dict, corrected: dict) -> dict:
+    """validation.validate on another recording, each set's a0 placed on that
+    recording first: the encoders' zeros are arbitrary per recording (README),
+    and `hdjoint diagnose --validate` keeps a0, which puts these recordings'
+    torsion past eq. (8)'s pole (all residuals NaN: it fails)."""
+    calibrated = dict(nominal, **{k: _estimate(v) for k, v in calibration.items()})
+    sets = [Diagnosis(rec, p).initial_offset(p) for p in (nominal, calibrated, corrected)]
+    return validate(rec, *sets)
+
+
+def halves(rec):
+    mid = len(rec) // 2
+    return rec.slice(0, mid), rec.slice(mid, None)
+
+
+def _diagnose(rec, n: float, tmp: Path, name: str) -> dict:
+    params, path = tmp / f"{name}-nominal.json", tmp / f"{name}.csv"
+    parameters.save(params, nominal_for(n))
+    write_recording(path, rec)
+    return diagnose_to_directory(str(path), str(params), str(tmp / name))
+
+
+def run_joint(joint: str, files: list[str], data: Path, tmp: Path) -> list[dict]:
+    """Each recording diagnosed whole; its corrected set validated on the joint's
+    other recording, or (a joint with one recording) the diagnosis of its first
+    half validated on its second half."""
+    recs = [read_recording(data / f) for f in files]
+    rows = []
+    for k, (name, rec) in enumerate(zip(files, recs)):
+        n = gear_ratio(rec)
+        doc = _diagnose(rec, n, tmp, f"{joint}-{k}")
+        calibration = doc.get("calibration", {})
+        row = {"joint": joint, "recording": name, "N_fitted": round(n, 3), "contents": contents(rec, n),
+               "verdict": doc["verdict"],
+               "findings": [{"effect": f["effect"], "kind": f.get("kind", "added"),
+                             "orders": {key: v for key, v in f["parameters"].items() if key.endswith("_order")}}
+                            for f in doc["findings"]],
+               "kinematic_calibration": {key: calibration[key] for key in KINEMATIC_EQ7 if key in calibration},
+               "proposed_terms": doc.get("proposed_terms", []), "seconds": doc.get("seconds"), "validation": []}
+        if len(recs) > 1:
+            other = recs[1 - k]
+            row["validated_on"] = files[1 - k]
+        else:
+            first, other = halves(rec)
+            row["validated_on"] = f"second half of {name} (diagnosed on its first half)"
+            try:
+                doc = _diagnose(first, n, tmp, f"{joint}-{k}-half")
+                calibration = doc.get("calibration", {})
+            except UserError as e:
+                reason = str(e).split(": ", 1)[-1]  # drop the temporary file's name
+                row["validated_on"] = f"none: only one recording of this joint, and its first half is {reason}"
+                other = None
+        if other is not None:
+            row["validation"] = [validate_with_own_zero(other, nominal_for(n), calibration, doc["params"])]
+        rows.append(row)
+        print(f"{name}: {row['verdict']} {[f['effect'] for f in row['findings']]}", flush=True)
+    return rows
+
+
+def _estimate(entry: dict):
+    """The calibrated value of a calibration entry, in either schema (today's or issue 10's)."""
+    return entry.get("estimate", entry.get("calibrated"))
+
+
+def write_table(rows: list[dict], path: Path = TABLE) -> str:
+    lines = ["# The diagnosis on the real LARA8 recordings", "",
+             f"Generated by `python benchmarks/lara8_table.py` on {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC, "
+             f"commit {_commit()}, machine {_machine()}.",
+             f"Nominal set: contract defaults with Kt = {KT}, N fitted to the encoders, Kf = K1 = {K1:g} N.m/rad, "
+             f"Cf = {catalogue_cf():.4f} 1/(N.m) (catalogue K1/K2 at T1/T2 through eq. (5)), mgl = 0.", "",
+             "## What each recording contains", "",
+             "| recording | s | samples | step (ms) | motor rev | link travel (rad) | motor / link reversals | "
+             "torque 2-98 % (N.m) | what it cannot say |", "|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        c = r["contents"]
+        lines.append(f"| {r['recording']} | {c['duration_s']} | {c['samples']} | {c['median_step_ms']} | "
+                     f"{c['motor_revolutions']} | {c['link_travel_rad']} | {c['motor_reversals']} / "
+                     f"{c['link_reversals']} | {c['torque_range_Nm'][0]} .. {c['torque_range_Nm'][1]} | "
+                     f"{'; '.join(c['cannot_say']) or '-'} |")
+    lines += ["", "## Verdict, the kinematic error, and the torsion residual on another recording", "",
+              "| recording | N fitted | verdict | findings (kind, orders) | eq. (7) coefficients: nominal -> calibrated "
+              "(x nominal) | validated on | residual RMS on it, N.m: nominal -> calibrated -> corrected |",
+              "|---|---|---|---|---|---|---|"]
+    for r in rows:
+        found = "; ".join(f"{f['effect']} ({f['kind']}" + (f", orders {f['orders']}" if f["orders"] else "") + ")"
+                          for f in r["findings"]) or "-"
+        kin = ", ".join(f"{k} {v['nominal']:.2g} -> {_estimate(v):.2g} ({_estimate(v) / v['nominal']:.1f}x)"
+                        for k, v in r["kinematic_calibration"].items() if v["nominal"]) or "not calibrated"
+        val = "; ".join(f"{ch}: {row['nominal']['rms']:.3f} -> {row['calibrated']['rms']:.3f} -> "
+                        f"{row['corrected']['rms']:.3f}" for v in r["validation"] for ch, row in v["channels"].items())
+        lines.append(f"| {r['recording']} | {r['N_fitted']} | {r['verdict']} | {found} | {kin} | "
+                     f"{r['validated_on']} | {val or '-'} |")
+    kinematic = [r for r in rows if any(f["effect"] == "kinematic_error" for f in r["findings"])]
+    lines += ["", f"Kinematic error named (added or resized): {len(kinematic)} of {len(rows)} diagnoses. "
+              "Proposed open-library terms: " + ("; ".join(f"{r['recording']}: {t['channel']} {t['terms']} "
+                                                           f"(held-out gain {t['holdout_gain']})"
+                                                           for r in rows for t in r["proposed_terms"]) or "none") + "."]
+    text = "\n".join(lines) + "\n"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text)
+    (path.with_suffix(".json")).write_text(json.dumps(rows, indent=1) + "\n")
+    return text
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--data", type=Path, default=DATA, help="folder of the LARA8 recordings")
+    ap.add_argument("--joints", nargs="+", default=list(JOINTS), choices=list(JOINTS))
+    args = ap.parse_args()
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="hdjoint-lara8-") as tmp:
+        for joint in args.joints:
+            rows += run_joint(joint, JOINTS[joint], args.data, Path(tmp))
+    print(write_table(rows))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,119 @@
+"""The independent truth of the diagnosis benchmark: independent of the
+project's own joint (no C++ core, no FMU), right (the contract's equations
+hold in what it simulates) and its sensor options do what they say."""
+import ast
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import hdjoint.truth as truth_package
+from hdjoint.truth import physics
+from hdjoint.truth.cases import CONTROL_CASES, EFFECT_CASES, draw
+from hdjoint.truth.physics import Form
+from hdjoint.truth.sensors import CurrentSensor, Encoder
+from hdjoint.truth.simulate import Setup, _Plant, check_form, simulate
+
+NOMINAL = dict(N=100.0, Kt=0.045, Jm=2.09e-5, Bm=3e-5, Fc=0.015, Kf=1e4, Cf=0.0645, Kw=10.0, Cw=10.0, a0=1e-4,
+               al1=1e-4, bl1=0.5e-4, omega_l=1.0, aw1=0.6e-4, bw1=-0.4e-4, aw2=0.2e-4, bw2=0.1e-4, omega_w=2.0,
+               Jl=0.15, Bl=0.05, mgl=5.0, Df=4.0)
+FORBIDDEN = {"_core", "fmu_runner", "fmus", "experiments", "cases", "channels", "diagnosis", "cosim"}
+
+
+def test_the_truth_imports_nothing_of_the_projects_joint():
+    for path in Path(truth_package.__file__).parent.glob("*.py"):
+        tree = ast.parse(path.read_text())
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom) and node.level == 2:  # from ..x import y (hdjoint itself)
+                names = {node.module} if node.module else {a.name for a in node.names}
+                assert not names & FORBIDDEN, f"{path.name} imports {names & FORBIDDEN} of the project's joint"
+            if isinstance(node, ast.Import):
+                assert not any(a.name.startswith("hdjoint.") and a.name.split(".")[1] in FORBIDDEN
+                               for a in node.names), path.name
+
+
+def contract_torque(p, theta_m, theta_l, tau_w):
+    """CONTRACT.md eq. (3)-(8), written out here on their own."""
+    dtheta = theta_m / p["N"] - theta_l
+    wg = math.copysign(1.0, tau_w) / (p["Cw"] * p["N"] * p["Kw"]) * (1.0 - math.exp(-p["Cw"] * abs(tau_w)))
+    wl, ww = p["omega_l"] * theta_l, p["omega_w"] * theta_m
+    err = (p["a0"] + p["al1"] * math.cos(wl) + p["bl1"] * math.sin(wl) + p["aw1"] * math.cos(ww)
+           + p["bw1"] * math.sin(ww) + p["aw2"] * math.cos(2 * ww) + p["bw2"] * math.sin(2 * ww))
+    return math.tan(p["Cf"] * p["Kf"] * (dtheta - wg - err)) / p["Cf"]
+
+
+@pytest.mark.parametrize("theta_l", [-0.9, 0.2, 1.1])
+def test_static_joint_holds_gravity_through_the_contracts_compliance(theta_l):
+    plant = _Plant(NOMINAL, Form(), theta_l)  # at rest in static equilibrium
+    tau = plant.transmitted()
+    assert tau == pytest.approx(NOMINAL["mgl"] * math.sin(theta_l), abs=1e-6)
+    assert tau == pytest.approx(contract_torque(NOMINAL, plant.theta_m, plant.theta_l, tau / NOMINAL["N"]), abs=1e-6)
+
+
+def test_simulated_motion_obeys_the_link_and_motor_equations():
+    setup = Setup(excitation="multisine", duration=4.0, motor_encoder=Encoder(0), link_encoder=Encoder(0),
+                  current_sensor=CurrentSensor(white=0.0), with_torque_sensor=False)
+    form = Form(omega_fc=1.0)
+    rec = simulate(NOMINAL, form, setup, NOMINAL)
+    t, tau = rec.time, rec.extra["tau_joint"]
+    w_l, w_m = np.gradient(rec.theta_l, t), np.gradient(rec.theta_m, t)
+    a_l, a_m = np.gradient(w_l, t), np.gradient(w_m, t)
+    inner = slice(1500, -50)  # after the fade-in, away from the ends of the differences
+    link = NOMINAL["Jl"] * a_l + NOMINAL["Bl"] * w_l + NOMINAL["mgl"] * np.sin(rec.theta_l)
+    motor = NOMINAL["N"] * (NOMINAL["Kt"] * rec.i_m - NOMINAL["Jm"] * a_m - NOMINAL["Bm"] * w_m
+                            - NOMINAL["Fc"] * np.tanh(w_m / form.omega_fc))
+    scale = np.std(tau[inner])
+    assert scale > 0.5
+    # Within 5 % of the torque's swing: the step is 0.2 ms, the differences 1 ms.
+    assert np.sqrt(np.mean((link - tau)[inner] ** 2)) < 0.05 * scale
+    assert np.sqrt(np.mean((motor - tau)[inner] ** 2)) < 0.05 * scale
+
+
+def test_encoder_quantisers_floor_or_round_and_interpolation_error():
+    x = np.linspace(-3.0, 3.0, 10001)
+    step = 2 * math.pi / 4096
+    floor, nearest = Encoder(4096, "floor").read(x), Encoder(4096, "round").read(x)
+    assert np.all(floor <= x + 1e-15) and np.all(x - floor < step)
+    assert np.max(np.abs(nearest - x)) <= step / 2 + 1e-12
+    assert np.mean(x - floor) == pytest.approx(step / 2, rel=0.05)  # floor reads half a count low on average
+    wobbly = Encoder(4096, "round", interpolation=0.4).read(x)
+    assert np.max(np.abs(wobbly - x)) > step / 2 + 0.2 * step
+    with pytest.raises(ValueError, match="rounding"):
+        Encoder(4096, "ceil").read(x)
+
+
+def test_current_sensor_gain_offset_and_delay():
+    rng = np.random.default_rng(0)
+    sensor = CurrentSensor(gain_error=0.02, offset=0.01, white=0.001)
+    assert np.mean(sensor.read(np.ones(5000), 1e-3, rng)) == pytest.approx(1.03, abs=1e-3)
+    step = np.r_[np.zeros(10), np.ones(10)]
+    delayed = CurrentSensor(white=0.0, delay=3e-3).read(step, 1e-3, rng)
+    assert np.flatnonzero(delayed > 0.5)[0] == 13
+
+
+def test_sampling_jitter_shows_in_the_time_stamps_only_when_asked():
+    base = dict(excitation="chirp", duration=0.5, jitter=1.5e-4)
+    rec = simulate(NOMINAL, Form(substeps=8), Setup(**base, stamp_actual_times=True), NOMINAL)
+    dt = np.diff(rec.time)
+    assert dt.min() < 1e-3 - 5e-5 and dt.max() > 1e-3 + 5e-5 and dt.min() > 0
+    assert np.all(np.abs(dt - 1e-3) <= 1.5e-4 + 1e-9)
+    regular = simulate(NOMINAL, Form(substeps=8), Setup(**base), NOMINAL)
+    assert np.allclose(np.diff(regular.time), 1e-3)
+
+
+def test_forms_that_cannot_run_are_refused_by_name():
+    with pytest.raises(ValueError, match="Heun"):
+        check_form(Form(friction="lugre", integrator="heun"))
+    with pytest.raises(ValueError, match="friction"):
+        check_form(Form(friction="viscous"))
+
+
+def test_cases_cover_every_effect_and_every_excitation_and_draw_differently_per_seed():
+    from hdjoint.effects import EFFECTS
+    present = {e for c in EFFECT_CASES for e in c.present}
+    assert present == set(EFFECTS) - {"wave_generator_load"}
+    assert {c.excitation for c in CONTROL_CASES} == {"paper", "multisine", "sweep", "constant_speeds", "chirp"}
+    a, b = draw(EFFECT_CASES[0], 0), draw(EFFECT_CASES[0], 1)
+    assert a.truth != b.truth and a.setups[0].excitation != a.setups[1].excitation
+    assert physics.kinematic_error(a.truth, a.form, 1.0, 0.01) != physics.kinematic_error(a.truth, Form(), 1.0, 0.01)
