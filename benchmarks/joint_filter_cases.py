@@ -79,9 +79,8 @@ def estimator_parameters(encoders: str) -> dict[str, float]:
     p = parameters.defaults()
     p["wg_load"] = 1.0  # the corrected model (the diagnosis's wave_generator_load)
     for name, factor in LINK_MODEL_ERROR.items():
-        p["jsf_" + name] = joint[name] * factor
-    p["jsf_motor_counts"] = ENCODERS[encoders]["motor_counts"]
-    p["jsf_link_counts"] = ENCODERS[encoders]["link_counts"]
+        p[name] = joint[name] * factor
+    p.update(ENCODERS[encoders])
     return p
 
 

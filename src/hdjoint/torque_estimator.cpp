@@ -9,7 +9,7 @@
 namespace hdjoint {
 
 namespace {
-constexpr double kStateVersion = 3.0;
+constexpr double kStateVersion = 4.0;
 
 std::string describe_input(const EstimatorInputs& in) {
     std::ostringstream s;
@@ -101,6 +101,16 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
         case FilterStatus::UpdateSkipped:
             if (message) *message = "UKF innovation covariance is singular; measurement update skipped";
             return EstimatorStatus::UpdateSkipped;
+        case FilterStatus::SampleRejected:
+            if (message) {
+                std::ostringstream s;
+                s.precision(6);
+                s << "joint-state filter: sample " << samples_ - 1 << " rejected as an outlier (innovation NIS "
+                  << joint_.output().nis << " > " << kOutlierGate << ", or no torque explains it; i_m = " << in.i_m
+                  << " A); predicted over it, tau_hat_std grows";
+                *message = s.str();
+            }
+            return EstimatorStatus::SampleRejected;
     }
     return EstimatorStatus::Ok;
 }

@@ -37,6 +37,7 @@ enum class EstimatorStatus {
     CovarianceRepaired,  // the UKF repaired an indefinite covariance (can go on)
     CovarianceReset,     // the UKF reset its covariance (can go on)
     UpdateSkipped,       // the measurement update was skipped (can go on)
+    SampleRejected,      // the joint-state filter rejected an outlier sample and predicted over it (can go on)
     SingularTorsion,     // |Cf*Kf*dtheta_f| >= pi/2: no torque explains the torsion
     InvalidInput,        // NaN or infinite input
 };

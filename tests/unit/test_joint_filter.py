@@ -75,8 +75,7 @@ def test_filter_beats_compliance_model_with_coarse_encoders_and_unknown_load():
     joint = {**parameters.defaults(), "motor_counts": 2048.0, "link_counts": 32768.0}
     rec = experiments.run("multisine", joint=joint, nominal=parameters.defaults(), duration=6.0,
                           tau_ext=experiments.contact_pushes)
-    p = {**parameters.defaults(), "wg_load": 1.0, "jsf_motor_counts": 2048.0, "jsf_link_counts": 32768.0,
-         "jsf_Jl": 1.05 * joint["Jl"], "jsf_mgl": 0.96 * joint["mgl"]}
+    p = {**joint, "wg_load": 1.0, "Jl": 1.05 * joint["Jl"], "mgl": 0.96 * joint["mgl"]}
     est = _core.run_estimator(parameters.for_estimator(p), rec.time, rec.i_m, rec.theta_m, rec.theta_l, smooth=True)
     truth = rec.extra["tau_joint"]
     base = error_figures(est["tau_compliance"], truth)
@@ -85,3 +84,31 @@ def test_filter_beats_compliance_model_with_coarse_encoders_and_unknown_load():
     # The standard deviation is of the right order: most errors within 3 sigma.
     err = np.abs(est["tau_hat"] - truth)
     assert np.mean(err < 3.0 * est["tau_hat_std"] + 0.02) > 0.9
+
+
+def test_the_filter_takes_the_joints_own_link_and_encoder_parameters(short_recording, params, batch):
+    # One joint, one parameter set: Jl, Bl, mgl and the encoder resolutions
+    # reach the joint-state filter in the batch path and in the FMU alike.
+    r = short_recording
+    joint = {**params, "Jl": 3.0 * params["Jl"], "mgl": 0.5 * params["mgl"], "motor_counts": 1024.0}
+    other = _core.run_estimator(joint, r.time, r.i_m, r.theta_m, r.theta_l)
+    assert np.max(np.abs(other["tau_hat"] - batch["tau_hat"])) > 1e-3
+    assert np.max(np.abs(other["tau_hat_std"] - batch["tau_hat_std"])) > 1e-4  # coarser motor encoder
+    fmu = run_estimator_fmu(r.time, r.i_m, r.theta_m, r.theta_l, joint)
+    np.testing.assert_array_equal(fmu["tau_hat"], other["tau_hat"])
+
+
+def test_a_file_with_the_former_filter_copies_is_refused_naming_the_replacements(tmp_path):
+    path = tmp_path / "old.json"
+    path.write_text('{"jsf_Jl": 0.057, "jsf_link_counts": 32768, "Kt": 0.05}')
+    with pytest.raises(parameters.ParameterError) as e:
+        parameters.load(path)
+    assert "'jsf_Jl' is now 'Jl'" in str(e.value) and "'jsf_link_counts' is now 'link_counts'" in str(e.value)
+
+
+@pytest.mark.parametrize("name", ["motor_counts", "link_counts"])
+def test_encoder_counts_too_few_to_quantise_are_refused(name):
+    # Issue 12: 5e-324 was in range and 2*pi/counts overflowed.
+    with pytest.raises(parameters.ParameterError, match=name):
+        parameters.check({name: 5e-324})
+    assert parameters.check({name: 0.0}) == {name: 0.0}
