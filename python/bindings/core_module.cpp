@@ -291,6 +291,8 @@ nb::list table() {
 
 NB_MODULE(_core, m) {
     m.doc() = "hdjoint C++ core: the batch path (same code as the FMUs)";
+    // The batch status column's value for a sample the joint-state filter rejected as an outlier.
+    m.attr("STATUS_SAMPLE_REJECTED") = static_cast<int>(EstimatorStatus::SampleRejected);
     m.def("parameter_table", &table, "The parameter table (name, unit, default, range, scope, description).");
     m.def("check_parameters", &check_parameters, nb::arg("params"),
           "validate() on a whole parameter set: the first problem (naming the parameter), or None.");

@@ -42,6 +42,18 @@ def _estimator_params(args, rec):
     return params
 
 
+def _warn_rejected_samples(path, time, status) -> None:
+    """The joint-state filter predicted over outlier samples (the batch status column): say where."""
+    import numpy as np
+    from . import _core
+    rejected = np.flatnonzero(np.asarray(status) == _core.STATUS_SAMPLE_REJECTED)
+    if rejected.size:
+        first = ", ".join(f"{time[j]:g} s" for j in rejected[:5])
+        print(f"warning: {path}: the joint-state filter rejected {rejected.size} outlier sample(s) and predicted "
+              f"over them (at {first}{', ...' if rejected.size > 5 else ''}); tau_hat_std grows there",
+              file=sys.stderr)
+
+
 def cmd_estimate(args) -> int:
     from . import parameters
     from .metrics import error_figures
@@ -50,10 +62,15 @@ def cmd_estimate(args) -> int:
     params = parameters.for_estimator(_estimator_params(args, rec))
     if args.engine == "fmu":
         from .fmu_runner import FmuError, run_estimator_fmu
+        warnings: list[str] = []
         try:
-            est = run_estimator_fmu(rec.time, rec.i_m, rec.theta_m, rec.theta_l, params)
+            est = run_estimator_fmu(rec.time, rec.i_m, rec.theta_m, rec.theta_l, params, warnings=warnings)
         except FmuError as e:
             raise UserError(f"{args.recording}: {e}") from None
+        for message in warnings[:5]:
+            print(f"warning: {args.recording}: {message}", file=sys.stderr)
+        if len(warnings) > 5:
+            print(f"warning: {args.recording}: {len(warnings) - 5} more warnings", file=sys.stderr)
     else:
         from . import _core
         try:
@@ -61,14 +78,15 @@ def cmd_estimate(args) -> int:
         except RuntimeError as e:
             raise UserError(f"{args.recording}: {e}") from None
         from .fmu_runner import ESTIMATOR_OUTPUTS
+        _warn_rejected_samples(args.recording, rec.time, est["status"])
         est = {name: est[name] for name in ESTIMATOR_OUTPUTS}  # the FMU engine's columns, in its order
     if args.smooth:
         # The smoother runs offline over the joint-state filter's samples, in
         # the batch path, whichever engine computed the causal estimates.
         from . import _core
         try:
-            est["tau_smooth"] = _core.run_estimator(params, rec.time, rec.i_m, rec.theta_m, rec.theta_l,
-                                                    smooth=True)["tau_smooth"]
+            smoothed = _core.run_estimator(params, rec.time, rec.i_m, rec.theta_m, rec.theta_l, smooth=True)
+            est["tau_smooth"], est["tau_smooth_std"] = smoothed["tau_smooth"], smoothed["tau_smooth_std"]
         except RuntimeError as e:
             raise UserError(f"{args.recording}: {e}") from None
     write_csv(args.output, {"time": rec.time, **est})
