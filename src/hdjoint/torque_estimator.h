@@ -80,6 +80,8 @@ private:
     EstimatorOutputs out_;
     double previous_theta_m_ = 0.0;
     double previous_u_ = 0.0;  // Kt*i_m - tau_fm of the previous sample
+    // Running means of NIS/2 of the paper UKF and the joint-state filter (std_nis_time).
+    double nis_mean_ukf_ = 1.0, nis_mean_hat_ = 1.0;
     long samples_ = 0;
 };
 

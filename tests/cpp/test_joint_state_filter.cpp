@@ -118,7 +118,7 @@ TEST(JointStateFilter, RecoversFromABrokenCovariance) {
     for (int k = 0; k < 400; ++k) ASSERT_EQ(a.step(inputs[k]), EstimatorStatus::Ok) << k;
     // Break the filter's covariance (what a failed factorisation leaves): NaN.
     std::vector<double> saved = a.save_state();
-    const std::size_t joint_start = saved.size() - 3 - JointStateFilter::kSavedSize;
+    const std::size_t joint_start = saved.size() - 5 - JointStateFilter::kSavedSize;
     saved[joint_start + 1 + kJointStates + 7] = std::numeric_limits<double>::quiet_NaN();
     TorqueEstimator b(p);
     ASSERT_TRUE(b.load_state(saved));

@@ -69,13 +69,19 @@ def test_smoother_needs_no_future_for_the_last_sample(batch):
     assert np.any(batch["tau_smooth"][:-1] != batch["tau_hat"][:-1])
 
 
-def test_filter_beats_compliance_model_with_coarse_encoders_and_unknown_load():
-    # Closed loop, contact pushes unknown to everyone, 15-bit link / 2048-count
-    # motor encoders, the filter's link model 5 % off: a short benchmark case.
+@pytest.fixture(scope="module")
+def coarse_run():
+    """Closed loop, contact pushes unknown to everyone, 15-bit link / 2048-count
+    motor encoders, the filter's link model 5 % off: a short benchmark case."""
     joint = {**parameters.defaults(), "motor_counts": 2048.0, "link_counts": 32768.0}
     rec = experiments.run("multisine", joint=joint, nominal=parameters.defaults(), duration=6.0,
                           tau_ext=experiments.contact_pushes)
     p = {**joint, "wg_load": 1.0, "Jl": 1.05 * joint["Jl"], "mgl": 0.96 * joint["mgl"]}
+    return rec, p
+
+
+def test_filter_beats_compliance_model_with_coarse_encoders_and_unknown_load(coarse_run):
+    rec, p = coarse_run
     est = _core.run_estimator(parameters.for_estimator(p), rec.time, rec.i_m, rec.theta_m, rec.theta_l, smooth=True)
     truth = rec.extra["tau_joint"]
     base = error_figures(est["tau_compliance"], truth)
@@ -84,6 +90,27 @@ def test_filter_beats_compliance_model_with_coarse_encoders_and_unknown_load():
     # The standard deviation is of the right order: most errors within 3 sigma.
     err = np.abs(est["tau_hat"] - truth)
     assert np.mean(err < 3.0 * est["tau_hat_std"] + 0.02) > 0.9
+
+
+def test_nis_scaled_deviations_are_honest_where_the_papers_ukf_is_overconfident(coarse_run):
+    # Coverage of +-2 sigma (95 % when honest). The paper's UKF on coarse
+    # encoders believes itself far too much; std_nis_time widens each
+    # deviation by the innovations it did not expect (benchmark: 93-95 %).
+    # The UKF's settings are the benchmark's tuning for these encoders: a
+    # grossly mistuned filter (the defaults' ukf_r_torsion here) stays dishonest.
+    rec, p = coarse_run
+    p = {**p, "ukf_q_tau": 0.1, "ukf_r_torsion": 6e-5, "ukf_r_omega": 0.3}
+    truth = rec.extra["tau_joint"][1000:]  # after the start-up
+    coverage = {}
+    for t in (0.0, 0.05):
+        est = _core.run_estimator(parameters.for_estimator({**p, "std_nis_time": t}), rec.time, rec.i_m,
+                                  rec.theta_m, rec.theta_l)
+        for name in ("tau_ukf", "tau_hat"):
+            e = np.abs(est[name][1000:] - truth)
+            coverage[name, t] = 100.0 * np.mean(e <= 2.0 * est[name + "_std"][1000:])
+    assert coverage["tau_ukf", 0.0] < 80.0, coverage
+    assert 90.0 <= coverage["tau_ukf", 0.05] <= 99.0, coverage
+    assert 90.0 <= coverage["tau_hat", 0.05] <= 99.0, coverage
 
 
 def test_the_filter_takes_the_joints_own_link_and_encoder_parameters(short_recording, params, batch):
