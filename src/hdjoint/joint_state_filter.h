@@ -127,10 +127,10 @@ struct JointFilterOutput {
     double nis = 0.0;   // of the update, or of the rejected innovation
 };
 
-// NIS above which a sample is an outlier. The benchmark's largest NIS on
-// valid samples (payload steps, contacts, hysteresis, coarse encoders) is
-// documented in docs/estimators.md; a 1e6 A current or a glitched reading
-// gives NIS of 1e9 and more.
+// NIS above which a sample is an outlier. On the benchmark's valid samples
+// (payload steps, contacts, hysteresis, coarse encoders) the gate rejects
+// none (docs/estimators.md); a 1e6 A current or a glitched reading gives NIS
+// of 1e9 and more.
 constexpr double kOutlierGate = 1.0e4;
 // ... and whose innovation is larger than this link-side angle, rad: in
 // torsion 1e-2 rad is some 100 N.m at the default stiffness, beyond what the
