@@ -17,14 +17,30 @@ Tuning, the same for both filters: a grid search over their noise settings
 at 0.2 and 0.7 Hz, other payload steps and contact pushes, other noise seed;
 not a test recording), against its torque sensor. The compliance model has nothing to tune.
 
+Coverage: the share of samples whose true torque lies within +-2 sigma of
+each estimate (tau_ukf_std, tau_hat_std, tau_smooth_std); 95 % is honest.
+
+"Model is wrong": the paper's experiment on a joint whose wave generator is
+loaded by the transmitted torque while the nominal file keeps the paper's
+approximation; estimated with the nominal file and with the file
+`hdjoint diagnose` writes from another recording of the same joint.
+
+The tables go to stdout and to docs/results/estimators.md (with date and machine).
+
 Run: python benchmarks/joint_filter_cases.py [--quick]
 """
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import datetime
 import math
+import os
+import platform
+import tempfile
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -39,6 +55,9 @@ HYSTERESIS = {"bw_A": 3e4, "bw_beta": 2e5, "bw_gamma": 1e5}  # Bouc-Wen, saturat
 # The link model the filter assumes, relative to the joint's.
 LINK_MODEL_ERROR = {"Jl": 1.05, "Bl": 1.10, "mgl": 0.96}
 ESTIMATES = ("tau_compliance", "tau_ukf", "tau_hat", "tau_smooth")
+DEVIATIONS = {"tau_ukf": "tau_ukf_std", "tau_hat": "tau_hat_std", "tau_smooth": "tau_smooth_std"}
+STD_NIS_TIME = 0.05  # s: the averaging time the coverage table shows beside the filters' own deviations
+RESULTS = Path(__file__).resolve().parent.parent / "docs" / "results" / "estimators.md"
 
 
 @dataclass
@@ -79,9 +98,8 @@ def estimator_parameters(encoders: str) -> dict[str, float]:
     p = parameters.defaults()
     p["wg_load"] = 1.0  # the corrected model (the diagnosis's wave_generator_load)
     for name, factor in LINK_MODEL_ERROR.items():
-        p["jsf_" + name] = joint[name] * factor
-    p["jsf_motor_counts"] = ENCODERS[encoders]["motor_counts"]
-    p["jsf_link_counts"] = ENCODERS[encoders]["link_counts"]
+        p[name] = joint[name] * factor
+    p.update(ENCODERS[encoders])
     return p
 
 
@@ -116,29 +134,82 @@ def run_case(case: Case, params: dict[str, float], duration: float | None) -> di
                               smooth=True)
     truth = rec.extra["tau_joint"]
     figures = {name: error_figures(est[name], truth) for name in ESTIMATES}
-    return {"case": case, "figures": figures, "seconds": rec.duration}
+    cover = lambda e, name: 100.0 * float(np.mean(np.abs(e[name] - truth) <= 2.0 * e[DEVIATIONS[name]]))  # noqa: E731
+    coverage = {name: cover(est, name) for name in DEVIATIONS}
+    # The same estimates with the NIS-scaled deviations (std_nis_time, off by default).
+    scaled = _core.run_estimator(parameters.for_estimator({**params, "std_nis_time": STD_NIS_TIME}), rec.time,
+                                 rec.i_m, rec.theta_m, rec.theta_l)
+    coverage.update({f"{name} (NIS-scaled)": cover(scaled, name) for name in ("tau_ukf", "tau_hat")})
+    return {"case": case, "figures": figures, "coverage": coverage, "seconds": rec.duration,
+            "rejected": int(np.sum(est["status"] == _core.STATUS_SAMPLE_REJECTED)), "samples": len(truth)}
 
 
-def print_table(results):
-    head = "| case | " + " | ".join(f"{n} RMS / max (N.m)" for n in ESTIMATES) + \
-        " | reduction vs compliance: UKF / tau_hat / tau_smooth |"
-    print(head)
-    print("|" + "---|" * (len(ESTIMATES) + 2))
+def reduction_table(results) -> tuple[list[str], dict[str, float]]:
+    lines = ["| case | " + " | ".join(f"{n} RMS / max (N.m)" for n in ESTIMATES) +
+             " | reduction vs compliance: UKF / tau_hat / tau_smooth |",
+             "|" + "---|" * (len(ESTIMATES) + 2)]
     reductions = {n: [] for n in ESTIMATES[1:]}
     for r in results:
         f = r["figures"]
         base = f["tau_compliance"]
         cells = [f"{f[n].rms:.3f} / {f[n].max:.3f}" for n in ESTIMATES]
-        red = []
         for n in ESTIMATES[1:]:
             reductions[n].append(f[n].reduction_against(base))
-            red.append(f"{reductions[n][-1]:+.0f} %".replace("+", "-", 1) if False else f"{reductions[n][-1]:.0f} %")
-        print(f"| {r['case'].name} | " + " | ".join(cells) + " | " + " / ".join(red) + " |")
+        lines.append(f"| {r['case'].name} | " + " | ".join(cells) + " | " +
+                     " / ".join(f"{reductions[n][-1]:.0f} %" for n in ESTIMATES[1:]) + " |")
     means = {n: float(np.mean(v)) for n, v in reductions.items()}
     rms_mean = {n: float(np.mean([r["figures"][n].rms for r in results])) for n in ESTIMATES}
-    print(f"| **average** | " + " | ".join(f"{rms_mean[n]:.3f}" for n in ESTIMATES) + " | " +
-          " / ".join(f"**{means[n]:.0f} %**" for n in ESTIMATES[1:]) + " |")
-    return means
+    lines.append("| **average** | " + " | ".join(f"{rms_mean[n]:.3f}" for n in ESTIMATES) + " | " +
+                 " / ".join(f"**{means[n]:.0f} %**" for n in ESTIMATES[1:]) + " |")
+    return lines, means
+
+
+def coverage_table(results) -> list[str]:
+    names = ("tau_ukf", "tau_ukf (NIS-scaled)", "tau_hat", "tau_hat (NIS-scaled)", "tau_smooth")
+    lines = ["| case | " + " | ".join(names) + " | samples rejected as outliers (of all) |", "|" + "---|" * (len(names) + 2)]
+    for r in results:
+        c = r["coverage"]
+        lines.append(f"| {r['case'].name} | " + " | ".join(f"{c[n]:.1f} %" for n in names) +
+                     f" | {r['rejected']} of {r['samples']} |")
+    return lines
+
+
+def model_is_wrong(duration: float) -> list[str]:
+    """The paper's approximation of the wave generator load against a joint that
+    does not follow it: estimates with the nominal file and with the diagnosed one."""
+    from hdjoint import cli
+    from hdjoint.cases import CASES, nominal_for, record
+    from hdjoint.recording import write_recording
+    case = next(c for c in CASES if c.present == ("wave_generator_load",))
+    bench, run = record(case, duration=duration), record(dataclasses.replace(case, seed=23), duration=duration)
+    truth = run.extra["tau_joint"]
+    lines = ["| parameter file | " + " | ".join(f"{n} RMS (N.m)" for n in ESTIMATES) + " |",
+             "|" + "---|" * (len(ESTIMATES) + 1)]
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        write_recording(tmp / "bench.csv", bench)
+        parameters.save(tmp / "nominal.json", nominal_for(case))
+        if cli.main(["diagnose", str(tmp / "bench.csv"), "--params", str(tmp / "nominal.json"),
+                     "--out", str(tmp / "d")]) != 0:
+            raise RuntimeError("the diagnosis failed on the bench recording")
+        for label, path in (("nominal (paper's approximation)", tmp / "nominal.json"),
+                            ("after hdjoint diagnose", tmp / "d" / "params.json")):
+            p = parameters.for_estimator(parameters.load(path))
+            est = _core.run_estimator(p, run.time, run.i_m, run.theta_m, run.theta_l, smooth=True)
+            lines.append(f"| {label} | " + " | ".join(f"{error_figures(est[n], truth).rms:.3f}"
+                                                     for n in ESTIMATES) + " |")
+    return lines
+
+
+def write_results(sections: list[tuple[str, list[str]]], notes: list[str]) -> None:
+    stamp = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    machine = f"{platform.node()}, {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
+    text = [f"# Estimator benchmark (benchmarks/joint_filter_cases.py)", "",
+            f"Written by the benchmark on {stamp}; machine: {machine}.", ""] + notes + [""]
+    for title, lines in sections:
+        text += [f"## {title}", ""] + lines + [""]
+    RESULTS.parent.mkdir(parents=True, exist_ok=True)
+    RESULTS.write_text("\n".join(text))
 
 
 def main(argv=None):
@@ -147,18 +218,29 @@ def main(argv=None):
     args = ap.parse_args(argv)
     duration = 10.0 if args.quick else None
     start = time.perf_counter()
-    tuned = {}
+    tuned, notes = {}, []
     for enc in ENCODERS:
         tuned[enc], note = tuned_parameters(enc, 10.0 if args.quick else 20.0)
-        print(f"tuned on the tuning recording ({enc} encoders): {note}")
+        notes.append(f"Tuned on the tuning recording ({enc} encoders): {note}.")
+        print(notes[-1])
     results = []
     for case in CASES:
         results.append(run_case(case, tuned[case.encoders], duration))
         print(f"  done: {case.name} ({time.perf_counter() - start:.0f} s)", flush=True)
-    print()
-    means = print_table(results)
-    print(f"\naverage RMS reduction vs compliance: paper UKF {means['tau_ukf']:.1f} %, tau_hat "
-          f"{means['tau_hat']:.1f} %, tau_smooth {means['tau_smooth']:.1f} %  ({time.perf_counter() - start:.0f} s)")
+    reduction, means = reduction_table(results)
+    coverage = coverage_table(results)
+    wrong = model_is_wrong(10.0 if args.quick else 20.0)
+    sections = [("RMS error against the true joint torque, and reduction below the compliance model", reduction),
+                (f"Coverage: true torque within +-2 sigma (honest: 95 %); NIS-scaled: std_nis_time = {STD_NIS_TIME} s",
+                 coverage),
+                ("Model is wrong: nominal file against the diagnosed one", wrong)]
+    for title, lines in sections:
+        print(f"\n{title}\n" + "\n".join(lines))
+    summary = (f"average RMS reduction vs compliance: paper UKF {means['tau_ukf']:.1f} %, tau_hat "
+               f"{means['tau_hat']:.1f} %, tau_smooth {means['tau_smooth']:.1f} %  "
+               f"({time.perf_counter() - start:.0f} s{', --quick' if args.quick else ''})")
+    print("\n" + summary)
+    write_results(sections, notes + [summary])
 
 
 if __name__ == "__main__":

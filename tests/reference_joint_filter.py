@@ -35,7 +35,7 @@ def dynamics(p, x, i_m):
     tau = joint_torque(p, x, i_m)
     omega_m = p["N"] * (omega_l + nu)
     friction = p["Fc"] * np.tanh(omega_m / p["omega_fc"]) + p["Bm"] * omega_m
-    link_acc = (tau - p["jsf_Bl"] * omega_l - p["jsf_mgl"] * np.sin(theta_l) - w) / p["jsf_Jl"]
+    link_acc = (tau - p["Bl"] * omega_l - p["mgl"] * np.sin(theta_l) - w) / p["Jl"]
     motor_acc = (p["Kt"] * i_m - friction - tau / p["N"]) / (p["N"] * p["Jm"])  # of omega_l + nu
     return np.array([omega_l, link_acc, nu, motor_acc - link_acc, rate, 0.0 * w])
 
@@ -70,8 +70,8 @@ def noise(p):
     Q = a * a * np.outer(G, G)
     Q[4, 4] += p["jsf_q_load"] ** 2
     Q[5, 5] += p["jsf_q_load_rate"] ** 2
-    qm = TWO_PI / p["jsf_motor_counts"] if p["jsf_motor_counts"] > 0 else 0.0
-    ql = TWO_PI / p["jsf_link_counts"] if p["jsf_link_counts"] > 0 else 0.0
+    qm = TWO_PI / p["motor_counts"] if p["motor_counts"] > 0 else 0.0
+    ql = TWO_PI / p["link_counts"] if p["link_counts"] > 0 else 0.0
     R = np.diag([max(p["jsf_r_theta_m"] ** 2 + qm * qm / 12, 1e-24), max(p["jsf_r_theta_l"] ** 2 + ql * ql / 12, 1e-24)])
     return Q, R, np.array([qm / 2, ql / 2])
 
@@ -90,7 +90,7 @@ def joint_filter(p, i_m, theta_m, theta_l):
             x = np.zeros(6)
             x[0] = z[1]
             x[2] = z[0] / p["N"] - z[1]
-            x[4] = joint_torque(p, x, i_m[0]) - p["jsf_mgl"] * np.sin(x[0])
+            x[4] = joint_torque(p, x, i_m[0]) - p["mgl"] * np.sin(x[0])
             P = np.diag([P0_ANGLE**2, P0_SPEED**2, P0_TORSION**2, P0_SPEED**2, p["jsf_p0_load"] ** 2, p["jsf_p0_load"] ** 2])
             F = np.eye(6)
         else:

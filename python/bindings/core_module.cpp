@@ -3,12 +3,14 @@
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/map.h>
+#include <nanobind/stl/optional.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/vector.h>
 
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -39,6 +41,16 @@ Parameters parameters_from(const std::map<std::string, double>& values, bool est
     }
     if (auto problem = validate(p, estimator, plant)) throw std::invalid_argument(*problem);
     return p;
+}
+
+// validate() on a whole set (both FMUs' parameters): the problem, or None.
+std::optional<std::string> check_parameters(const std::map<std::string, double>& values) {
+    try {
+        parameters_from(values, true, true);
+    } catch (const std::invalid_argument& e) {
+        return std::string(e.what());
+    }
+    return std::nullopt;
 }
 
 OutArray make_array(std::vector<double>&& data) {
@@ -279,7 +291,11 @@ nb::list table() {
 
 NB_MODULE(_core, m) {
     m.doc() = "hdjoint C++ core: the batch path (same code as the FMUs)";
+    // The batch status column's value for a sample the joint-state filter rejected as an outlier.
+    m.attr("STATUS_SAMPLE_REJECTED") = static_cast<int>(EstimatorStatus::SampleRejected);
     m.def("parameter_table", &table, "The parameter table (name, unit, default, range, scope, description).");
+    m.def("check_parameters", &check_parameters, nb::arg("params"),
+          "validate() on a whole parameter set: the first problem (naming the parameter), or None.");
     m.def("run_estimator", &run_estimator, nb::arg("params"), nb::arg("time"), nb::arg("i_m"), nb::arg("theta_m"),
           nb::arg("theta_l"), nb::arg("smooth") = false,
           "Compliance model, paper UKF and the joint-state filter (tau_hat, tau_hat_std, tau_load) over a "

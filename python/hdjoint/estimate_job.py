@@ -17,6 +17,26 @@ from .recording import CsvWriter, Recording, RecordingError, iter_recording
 from .timebase import TIME_UNITS, TimeBaseError, check_step, describe, irregular_steps
 
 FIGURES_OF = ("tau_compliance", "tau_ukf", "tau_hat")
+SHOWN_WARNINGS = 5
+
+
+def warn_fmu_messages(path, messages) -> None:
+    """The FMU's fmi2Warning messages (e.g. an outlier sample the joint-state filter predicted over)."""
+    for message in messages[:SHOWN_WARNINGS]:
+        print(f"warning: {path}: {message}", file=sys.stderr)
+    if len(messages) > SHOWN_WARNINGS:
+        print(f"warning: {path}: {len(messages) - SHOWN_WARNINGS} more warnings", file=sys.stderr)
+
+
+def warn_rejected_samples(path, time, status) -> None:
+    """The joint-state filter predicted over outlier samples (the batch status column): say where."""
+    from . import _core
+    rejected = np.flatnonzero(np.asarray(status) == _core.STATUS_SAMPLE_REJECTED)
+    if rejected.size:
+        first = ", ".join(f"{time[j]:g} s" for j in rejected[:SHOWN_WARNINGS])
+        more = ", ..." if rejected.size > SHOWN_WARNINGS else ""
+        print(f"warning: {path}: the joint-state filter rejected {rejected.size} outlier sample(s) and predicted "
+              f"over them (at {first}{more}); tau_hat_std grows there", file=sys.stderr)
 
 
 @dataclass
@@ -118,9 +138,9 @@ class _StreamedFmu:
     waits for the next block; a segment's last row steps by Ts (as
     run_estimator_fmu does with a recording's last row)."""
 
-    def __init__(self, params: dict, ts: float, emit):
+    def __init__(self, params: dict, ts: float, emit, path):
         from .fmu_runner import ESTIMATOR_OUTPUTS
-        self.params, self.ts, self.emit = params, ts, emit
+        self.params, self.ts, self.emit, self.path = params, ts, emit, path
         self.outputs = ESTIMATOR_OUTPUTS
         self._instance = self._stepper = None
         self._pending = None  # (time, inputs) of the row awaiting its step
@@ -154,6 +174,7 @@ class _StreamedFmu:
 
     def close(self) -> None:
         if self._instance is not None:
+            warn_fmu_messages(self.path, [m for status, m in self._instance.messages if status == "WARNING"])
             self._instance.close()
             self._instance = None
 
@@ -195,7 +216,7 @@ def _streamed(opts: Options, blocks: TimedBlocks, params: dict) -> dict:
                 if len(sensor) > len(time):
                     sensor_rows.append(sensor[len(time):])
 
-        fmu = _StreamedFmu(params, blocks.ts, emit)
+        fmu = _StreamedFmu(params, blocks.ts, emit, opts.recording)
         has_sensor = None
         try:
             for block in blocks:
@@ -224,19 +245,23 @@ def _whole(opts: Options, blocks: TimedBlocks, params: dict) -> dict:
             if new_segment:
                 segments.append([])
             segments[-1].append(block.rec.slice(start, stop))
-    names = list(ESTIMATOR_OUTPUTS) + (["tau_smooth"] if opts.smooth else [])
+    names = list(ESTIMATOR_OUTPUTS) + (["tau_smooth", "tau_smooth_std"] if opts.smooth else [])
     for pieces in segments:
         r = {name: np.concatenate([getattr(p, name) for p in pieces])
              for name in ("time", "i_m", "theta_m", "theta_l")}
         args = (r["time"], r["i_m"], r["theta_m"], r["theta_l"])
         if opts.engine == "fmu":
-            est = run_estimator_fmu(*args, params)
+            warnings: list[str] = []
+            est = run_estimator_fmu(*args, params, warnings=warnings)
+            warn_fmu_messages(opts.recording, warnings)
         else:
             est = _core.run_estimator(params, *args)
+            warn_rejected_samples(opts.recording, r["time"], est["status"])
         if opts.smooth:
             # The smoother runs offline over the joint-state filter's samples, in
             # the batch path, whichever engine computed the causal estimates.
-            est["tau_smooth"] = _core.run_estimator(params, *args, smooth=True)["tau_smooth"]
+            smoothed = _core.run_estimator(params, *args, smooth=True)
+            est["tau_smooth"], est["tau_smooth_std"] = smoothed["tau_smooth"], smoothed["tau_smooth_std"]
         parts.append({"time": r["time"], **{name: est[name] for name in names}})
     columns = {name: np.concatenate([p[name] for p in parts]) for name in ["time", *names]}
     with CsvWriter(opts.output, list(columns)) as out:

@@ -164,8 +164,10 @@ class Stepper:
 
 
 def run_estimator_fmu(time, i_m, theta_m, theta_l, params: dict[str, float] | None = None,
-                      fmu: str | Path | None = None, outputs=ESTIMATOR_OUTPUTS) -> dict[str, np.ndarray]:
-    """JointTorqueEstimator.fmu over a recording's samples.
+                      fmu: str | Path | None = None, outputs=ESTIMATOR_OUTPUTS,
+                      warnings: list[str] | None = None) -> dict[str, np.ndarray]:
+    """JointTorqueEstimator.fmu over a recording's samples; the FMU's
+    fmi2Warning messages are appended to `warnings` when given.
 
     Row j is a communication point: its inputs are set, the FMU steps to the
     next row's time (the last row by Ts), and row j's outputs are read after the step.
@@ -184,4 +186,6 @@ def run_estimator_fmu(time, i_m, theta_m, theta_l, params: dict[str, float] | No
         columns = np.column_stack([i_m, theta_m, theta_l]).tolist()
         for j in range(n):
             result[j] = stepper.step(float(time[j]), float(steps[j]), columns[j])
+        if warnings is not None:
+            warnings.extend(message for status, message in inst.messages if status == "WARNING")
     return {name: result[:, k].copy() for k, name in enumerate(outputs)}

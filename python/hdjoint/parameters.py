@@ -18,6 +18,19 @@ class ParameterError(ValueError):
     """A parameter set that names an unknown parameter or a bad value."""
 
 
+# Names a parameter file may still use from an earlier release, with the name
+# that replaced them. They are refused (never silently ignored, never
+# aliased): the error names each one and its replacement, so a file is
+# migrated by renaming (docs/estimators.md, "Parameters").
+RENAMED = {
+    "jsf_Jl": "Jl",                      # the joint-state filter's copy of the joint's link inertia
+    "jsf_Bl": "Bl",
+    "jsf_mgl": "mgl",
+    "jsf_motor_counts": "motor_counts",
+    "jsf_link_counts": "link_counts",
+}
+
+
 @dataclass(frozen=True)
 class ParameterInfo:
     name: str
@@ -69,6 +82,11 @@ def check(params: dict, source: str = "parameter set") -> dict[str, float]:
     info = table()
     if not isinstance(params, dict):
         raise ParameterError(f"{source}: expected a JSON object of name: value")
+    renamed = [f"'{old}' is now '{RENAMED[old]}'" for old in params if old in RENAMED]
+    if renamed:
+        raise ParameterError(f"{source}: renamed parameter{'s' if len(renamed) > 1 else ''}: "
+                             + "; ".join(renamed) + " (one joint, one parameter set: rename them; if the file sets "
+                             "both names, keep the value that describes the joint)")
     checked = {}
     for name, value in params.items():
         if name not in info:
@@ -81,6 +99,9 @@ def check(params: dict, source: str = "parameter set") -> dict[str, float]:
             raise ParameterError(
                 f"{source}: parameter '{name}' = {value!r} is outside its valid range [{p.min}, {p.max}] {p.unit}")
         checked[name] = value
+    problem = _core.check_parameters({**defaults(), **checked})  # rules across the table (encoder counts, delay)
+    if problem is not None:
+        raise ParameterError(f"{source}: {problem}")
     return checked
 
 

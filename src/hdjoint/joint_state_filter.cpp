@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "friction.h"
 #include "transmission.h"
@@ -21,7 +22,7 @@ double resolution(double counts) { return counts > 0.0 ? kTwoPi / counts : 0.0; 
 
 JointTorque joint_state_torque(const JointState& x, const JointInput& in, const Parameters& p) {
     JointTorque t;
-    const double theta_l = x(0), theta_m = p.N * (x(0) + x(2));
+    const double theta_l = x(joint_state::kThetaL), theta_m = p.N * (theta_l + x(joint_state::kDelta));
     const ComplianceEstimate c = compliance_estimate(in.i_m, theta_m, theta_l, p);
     if (!c.valid) return t;
     // d tau / d y, y = delta - theta_err: the flexspline's stiffness (none
@@ -52,35 +53,41 @@ JointTorque JointSystemModel::torque(const State& x, const Control& u) const {
 }
 
 bool JointSystemModel::derivative(const State& x, const Control& u, State* dx, JointCovariance* J) const {
+    using namespace joint_state;
     const Parameters& q = p;
     const JointTorque T = torque(x, u);
     if (!T.valid) return false;
-    const double theta_l = x(0), omega_l = x(1), nu = x(3), w = x(4);
-    const double theta_m = q.N * (x(0) + x(2)), omega_m = q.N * (omega_l + nu);
+    const double theta_l = x(kThetaL), omega_l = x(kOmegaL), nu = x(kNu), w = x(kLoad);
+    const double theta_m = q.N * (theta_l + x(kDelta)), omega_m = q.N * (omega_l + nu);
     const double scale = friction_drift_scale(u.t, q);
     const double NJm = q.N * q.Jm;
-    const double a_l = (T.tau - q.jsf_Bl * omega_l - q.jsf_mgl * std::sin(theta_l) - w) / q.jsf_Jl;
+    const double a_l = (T.tau - q.Bl * omega_l - q.mgl * std::sin(theta_l) - w) / q.Jl;
     const double a_m = (motor_torque(u.i_m, theta_m, q) - motor_friction(omega_m, q, scale) - T.tau / q.N) / NJm;
-    *dx << omega_l, a_l, nu, a_m - a_l, x(5), 0.0;
+    (*dx)(kThetaL) = omega_l;
+    (*dx)(kOmegaL) = a_l;
+    (*dx)(kDelta) = nu;
+    (*dx)(kNu) = a_m - a_l;
+    (*dx)(kLoad) = x(kLoadRate);
+    (*dx)(kLoadRate) = 0.0;
 
     const double cog = cogging_on(q) ? cogging_slope(theta_m, q) : 0.0;  // d/d theta_m
     const double friction = coulomb_friction_slope(omega_m, q, scale) + q.Bm;  // d/d omega_m
     J->setZero();
-    (*J)(0, 1) = 1.0;
-    (*J)(1, 0) = (T.d_theta_l - q.jsf_mgl * std::cos(theta_l)) / q.jsf_Jl;
-    (*J)(1, 1) = -q.jsf_Bl / q.jsf_Jl;
-    (*J)(1, 2) = T.d_delta / q.jsf_Jl;
-    (*J)(1, 4) = -1.0 / q.jsf_Jl;
-    (*J)(2, 3) = 1.0;
+    (*J)(kThetaL, kOmegaL) = 1.0;
+    (*J)(kOmegaL, kThetaL) = (T.d_theta_l - q.mgl * std::cos(theta_l)) / q.Jl;
+    (*J)(kOmegaL, kOmegaL) = -q.Bl / q.Jl;
+    (*J)(kOmegaL, kDelta) = T.d_delta / q.Jl;
+    (*J)(kOmegaL, kLoad) = -1.0 / q.Jl;
+    (*J)(kDelta, kNu) = 1.0;
     const double am_theta_l = (cog * q.N - T.d_theta_l / q.N) / NJm;
     const double am_speed = -friction * q.N / NJm;  // by omega_l and by nu
     const double am_delta = (cog * q.N - T.d_delta / q.N) / NJm;
-    (*J)(3, 0) = am_theta_l - (*J)(1, 0);
-    (*J)(3, 1) = am_speed - (*J)(1, 1);
-    (*J)(3, 2) = am_delta - (*J)(1, 2);
-    (*J)(3, 3) = am_speed;
-    (*J)(3, 4) = -(*J)(1, 4);
-    (*J)(4, 5) = 1.0;
+    (*J)(kNu, kThetaL) = am_theta_l - (*J)(kOmegaL, kThetaL);
+    (*J)(kNu, kOmegaL) = am_speed - (*J)(kOmegaL, kOmegaL);
+    (*J)(kNu, kDelta) = am_delta - (*J)(kOmegaL, kDelta);
+    (*J)(kNu, kNu) = am_speed;
+    (*J)(kNu, kLoad) = -(*J)(kOmegaL, kLoad);
+    (*J)(kLoad, kLoadRate) = 1.0;
     return dx->allFinite() && J->allFinite();
 }
 
@@ -92,24 +99,31 @@ JointState JointSystemModel::step(const State& x, const Control& u, JointCovaria
         F->setIdentity();
         return x;
     }
-    // M = I - c*J, c = h/2. J's rows 0, 2, 4 are the kinematic identities
-    // (d theta_l = omega_l, d delta = nu, d w = r) and row 5 is zero, so
-    // M z = y reduces to a 2x2 system in (z1, z3): solved in closed form
-    // (the same numbers as a general LU up to round-off, at a fraction of its cost).
+    // M = I - c*J, c = h/2. J's rows kThetaL, kDelta, kLoad are the
+    // kinematic identities (d theta_l = omega_l, d delta = nu, d w = r) and
+    // row kLoadRate is zero, so M z = y reduces to a 2x2 system in
+    // (z_omega_l, z_nu): solved in closed form (the same numbers as a general
+    // LU up to round-off, at a fraction of its cost).
+    using namespace joint_state;
     const double c = 0.5 * h;
-    const double a11 = 1.0 - c * c * J(1, 0) - c * J(1, 1), a13 = -c * c * J(1, 2) - c * J(1, 3);
-    const double a31 = -c * c * J(3, 0) - c * J(3, 1), a33 = 1.0 - c * c * J(3, 2) - c * J(3, 3);
+    const double a11 = 1.0 - c * c * J(kOmegaL, kThetaL) - c * J(kOmegaL, kOmegaL);
+    const double a13 = -c * c * J(kOmegaL, kDelta) - c * J(kOmegaL, kNu);
+    const double a31 = -c * c * J(kNu, kThetaL) - c * J(kNu, kOmegaL);
+    const double a33 = 1.0 - c * c * J(kNu, kDelta) - c * J(kNu, kNu);
     const double det = a11 * a33 - a13 * a31;
     auto solve = [&](const State& y) {
         State z;
-        z(5) = y(5);
-        z(4) = y(4) + c * z(5);
-        const double r1 = y(1) + c * (J(1, 0) * y(0) + J(1, 2) * y(2) + J(1, 4) * z(4) + J(1, 5) * z(5));
-        const double r3 = y(3) + c * (J(3, 0) * y(0) + J(3, 2) * y(2) + J(3, 4) * z(4) + J(3, 5) * z(5));
-        z(1) = (a33 * r1 - a13 * r3) / det;
-        z(3) = (a11 * r3 - a31 * r1) / det;
-        z(0) = y(0) + c * z(1);
-        z(2) = y(2) + c * z(3);
+        z(kLoadRate) = y(kLoadRate);
+        z(kLoad) = y(kLoad) + c * z(kLoadRate);
+        auto rhs = [&](int row) {
+            return y(row) + c * (J(row, kThetaL) * y(kThetaL) + J(row, kDelta) * y(kDelta) + J(row, kLoad) * z(kLoad) +
+                                 J(row, kLoadRate) * z(kLoadRate));
+        };
+        const double r1 = rhs(kOmegaL), r3 = rhs(kNu);
+        z(kOmegaL) = (a33 * r1 - a13 * r3) / det;
+        z(kNu) = (a11 * r3 - a31 * r1) / det;
+        z(kThetaL) = y(kThetaL) + c * z(kOmegaL);
+        z(kDelta) = y(kDelta) + c * z(kNu);
         return z;
     };
     // F = M^-1 (I + c J) = 2 M^-1 - I.
@@ -121,6 +135,7 @@ JointState JointSystemModel::step(const State& x, const Control& u, JointCovaria
 }
 
 JointStateFilter::JointStateFilter(const Parameters& p) : p_(p) {
+    using namespace joint_state;
     system_.p = p;
     system_.h = p.Ts;
     measurement_.N = p.N;
@@ -128,83 +143,157 @@ JointStateFilter::JointStateFilter(const Parameters& p) : p_(p) {
     // torque held over the sample: an acceleration on nu.
     const double torque_std = std::hypot(p.Kt * p.jsf_current_noise, p.jsf_q_motor);
     const double a = torque_std / (p.N * p.Jm);
-    JointState G;
-    G << 0.0, 0.0, 0.5 * p.Ts * p.Ts, p.Ts, 0.0, 0.0;
+    JointState G = JointState::Zero();
+    G(kDelta) = 0.5 * p.Ts * p.Ts;
+    G(kNu) = p.Ts;
     Q_ = (a * a) * (G * G.transpose());
-    Q_(4, 4) = p.jsf_q_load * p.jsf_q_load;
-    Q_(5, 5) = p.jsf_q_load_rate * p.jsf_q_load_rate;
+    Q_(kLoad, kLoad) = p.jsf_q_load * p.jsf_q_load;
+    Q_(kLoadRate, kLoadRate) = p.jsf_q_load_rate * p.jsf_q_load_rate;
     // Floor quantisers: reading + q/2 is unbiased, variance q^2/12.
-    const double qm = resolution(p.jsf_motor_counts), ql = resolution(p.jsf_link_counts);
+    const double qm = resolution(p.motor_counts), ql = resolution(p.link_counts);
     offset_m_ = 0.5 * qm;
     offset_l_ = 0.5 * ql;
     R_.setZero();
     R_(0, 0) = std::max(p.jsf_r_theta_m * p.jsf_r_theta_m + qm * qm / 12.0, kMinReadingVariance);
     R_(1, 1) = std::max(p.jsf_r_theta_l * p.jsf_r_theta_l + ql * ql / 12.0, kMinReadingVariance);
-    JointCovariance P0 = JointCovariance::Zero();
-    P0.diagonal() << kP0Angle * kP0Angle, kP0Speed * kP0Speed, kP0Torsion * kP0Torsion, kP0Speed * kP0Speed,
-        p.jsf_p0_load * p.jsf_p0_load, p.jsf_p0_load * p.jsf_p0_load;  // load rate: jsf_p0_load per second
-    ukf_ = UnscentedKalmanFilter<kJointStates>(merwe_weights<kJointStates>(1.0, 2.0, 0.0), JointState::Zero(), P0);
+    JointState sd0;
+    sd0(kThetaL) = kP0Angle;
+    sd0(kOmegaL) = kP0Speed;
+    sd0(kDelta) = kP0Torsion;
+    sd0(kNu) = kP0Speed;
+    sd0(kLoad) = p.jsf_p0_load;
+    sd0(kLoadRate) = p.jsf_p0_load;  // per second
+    const JointCovariance P0 = sd0.cwiseAbs2().asDiagonal();
+    adapt_weight_ = p.jsf_load_adapt_time > 0.0 ? std::min(1.0, p.Ts / p.jsf_load_adapt_time) : 0.0;
+    kalman_ = UnscentedKalmanFilter<kJointStates>(merwe_weights<kJointStates>(1.0, 2.0, 0.0), JointState::Zero(), P0);
+}
+
+namespace {
+bool finite(const JointInput& in) { return std::isfinite(in.i_m) && std::isfinite(in.z) && std::isfinite(in.t); }
+}  // namespace
+
+JointCovariance JointStateFilter::process_noise() const {
+    using namespace joint_state;
+    JointCovariance Q = Q_;
+    const double s = std::max(1.0, load_noise_scale_);
+    Q(kLoad, kLoad) *= s;
+    Q(kLoadRate, kLoadRate) *= s;
+    return Q;
+}
+
+double JointStateFilter::torque_variance(const JointTorque& T, const JointCovariance& P) {
+    using namespace joint_state;
+    return T.d_theta_l * T.d_theta_l * P(kThetaL, kThetaL) + 2.0 * T.d_theta_l * T.d_delta * P(kThetaL, kDelta) +
+           T.d_delta * T.d_delta * P(kDelta, kDelta);
+}
+
+double JointStateFilter::gate(const Vector<2>& z) const {
+    // A filter told its readings are exact (no quantisation, no noise) has
+    // NIS in the millions on a model error of a micro-radian: only an
+    // innovation that is also large in angle can be an outlier.
+    if (readings_rejected_) return std::numeric_limits<double>::infinity();
+    const Vector<2> v = z - measurement_.h(kalman_.state());
+    const double angle = std::max(std::fabs(v(0)) / p_.N, std::fabs(v(1)));
+    return angle > kOutlierAngle ? kOutlierGate : std::numeric_limits<double>::infinity();
 }
 
 FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointInput& in) {
-    FilterStatus predicted = FilterStatus::Ok;
+    using namespace joint_state;
+    const bool readable = std::isfinite(theta_m) && std::isfinite(theta_l);
+    const Vector<2> z(theta_m + offset_m_, theta_l + offset_l_);
+    FilterStatus status = FilterStatus::Ok;
+    UnscentedKalmanFilter<kJointStates>::Update<2> update;
     if (!started_) {
+        if (!readable || !finite(in)) return FilterStatus::SampleRejected;  // nothing to start from
         // At rest, in static balance: the link load holds the torque the torsion shows.
-        JointState& x = ukf_.state();
+        JointState& x = kalman_.state();
         x.setZero();
-        x(0) = theta_l + offset_l_;
-        x(2) = (theta_m + offset_m_) / p_.N - x(0);
+        x(kThetaL) = theta_l + offset_l_;
+        x(kDelta) = (theta_m + offset_m_) / p_.N - x(kThetaL);
         const JointTorque T = joint_state_torque(x, in, p_);
-        x(4) = T.valid ? T.tau - p_.jsf_mgl * std::sin(x(0)) : 0.0;
-        ukf_.covariance() = ukf_.initial_covariance();
+        x(kLoad) = T.valid ? T.tau - p_.mgl * std::sin(x(kThetaL)) : 0.0;
+        kalman_.covariance() = kalman_.initial_covariance();
         record_.predicted = false;
         record_.F.setIdentity();
+        record_.x_prior = kalman_.state();
+        record_.P_prior = kalman_.covariance();
+        update = kalman_.update(measurement_, z, R_);
+        accepted_ = in;
         started_ = true;
     } else {
-        predicted = ukf_.predict(system_, previous_, Q_);
+        const UnscentedKalmanFilter<kJointStates> before = kalman_;
+        const JointCovariance Q = process_noise();
+        status = kalman_.predict(system_, previous_, Q);
+        record_.x_prior = kalman_.state();
+        record_.P_prior = kalman_.covariance();
+        update = readable ? kalman_.update(measurement_, z, R_, gate(z)) : decltype(update){};
+        if (!readable || update.status == FilterStatus::SampleRejected) {
+            // The current held since the last sample may be the outlier:
+            // predict again with the last one that passed; if the readings
+            // still fail, only predict (P grows, and so does tau_std).
+            const double rejected_nis = update.nis;
+            kalman_ = before;
+            status = std::max(status, kalman_.predict(system_, accepted_, Q));
+            record_.x_prior = kalman_.state();
+            record_.P_prior = kalman_.covariance();
+            if (readable) update = kalman_.update(measurement_, z, R_, gate(z));
+            readings_rejected_ = readable && update.status == FilterStatus::SampleRejected;
+            update.nis = rejected_nis;
+            update.status = FilterStatus::SampleRejected;
+        } else {
+            accepted_ = previous_;
+            readings_rejected_ = false;
+        }
         record_.predicted = true;
-        record_.F = ukf_.transition();
+        record_.F = kalman_.transition();
     }
-    record_.x_prior = ukf_.state();
-    record_.P_prior = ukf_.covariance();
-    const Vector<2> z(theta_m + offset_m_, theta_l + offset_l_);
-    const auto update = ukf_.update(measurement_, z, R_);
-    record_.x = ukf_.state();
-    record_.P = ukf_.covariance();
-    record_.input = in;
-    previous_ = in;
+    record_.x = kalman_.state();
+    record_.P = kalman_.covariance();
+    previous_ = finite(in) ? in : accepted_;
+    record_.input = previous_;
 
-    const JointTorque T = system_.torque(ukf_.state(), in);
-    const JointCovariance& P = ukf_.covariance();
-    out_.tau = T.valid ? T.tau : out_.tau;
-    const double var = T.d_theta_l * T.d_theta_l * P(0, 0) + 2.0 * T.d_theta_l * T.d_delta * P(0, 2) +
-                       T.d_delta * T.d_delta * P(2, 2);
-    out_.tau_std = std::sqrt(std::max(var, 0.0));
-    out_.load = ukf_.state()(4);
+    const JointTorque T = system_.torque(kalman_.state(), previous_);
+    if (T.valid) {
+        out_.tau = T.tau;
+        out_.tau_std = std::sqrt(std::max(torque_variance(T, kalman_.covariance()), 0.0));
+    } else {
+        // No torque explains this state: keep the last one, and say so.
+        status = std::max(status, FilterStatus::SampleRejected);
+    }
+    out_.load = kalman_.state()(kLoad);
     out_.nis = update.nis;
-    return std::max(predicted, update.status);
+    if (adapt_weight_ > 0.0 && update.status == FilterStatus::Ok)
+        load_noise_scale_ += adapt_weight_ * (0.5 * update.nis - load_noise_scale_);
+    if (!finite(in)) status = std::max(status, FilterStatus::SampleRejected);
+    return std::max(status, update.status);
 }
 
-// [started, x (5), P (25, column-major), previous input (i_m, z, t), outputs (tau, tau_std, load, nis)]
+// [started, x (6), P (36, column-major), previous and accepted input (i_m, z, t each),
+//  outputs (tau, tau_std, load, nis), load noise scale, readings rejected]
 void JointStateFilter::save(std::vector<double>* out) const {
     out->push_back(started_ ? 1.0 : 0.0);
-    const JointState& x = ukf_.state();
-    const JointCovariance& P = ukf_.covariance();
+    const JointState& x = kalman_.state();
+    const JointCovariance& P = kalman_.covariance();
     out->insert(out->end(), x.data(), x.data() + kJointStates);
     out->insert(out->end(), P.data(), P.data() + kJointStates * kJointStates);
-    out->insert(out->end(), {previous_.i_m, previous_.z, previous_.t, out_.tau, out_.tau_std, out_.load, out_.nis});
+    out->insert(out->end(), {previous_.i_m, previous_.z, previous_.t, accepted_.i_m, accepted_.z, accepted_.t,
+                             out_.tau, out_.tau_std, out_.load, out_.nis, load_noise_scale_,
+                             readings_rejected_ ? 1.0 : 0.0});
 }
 
 bool JointStateFilter::load(const std::vector<double>& in, std::size_t* cursor) {
     if (in.size() < *cursor + kSavedSize) return false;
     const double* d = in.data() + *cursor;
-    if (d[0] != 0.0 && d[0] != 1.0) return false;
-    started_ = d[0] == 1.0;
-    std::copy(d + 1, d + 1 + kJointStates, ukf_.state().data());
-    std::copy(d + 1 + kJointStates, d + 1 + kJointStates + kJointStates * kJointStates, ukf_.covariance().data());
     const double* r = d + 1 + kJointStates + kJointStates * kJointStates;
+    if ((d[0] != 0.0 && d[0] != 1.0) || (r[11] != 0.0 && r[11] != 1.0)) return false;
+    started_ = d[0] == 1.0;
+    std::copy(d + 1, d + 1 + kJointStates, kalman_.state().data());
+    std::copy(d + 1 + kJointStates, d + 1 + kJointStates + kJointStates * kJointStates, kalman_.covariance().data());
     previous_ = {r[0], r[1], r[2]};
-    out_ = {r[3], r[4], r[5], r[6]};
+    accepted_ = {r[3], r[4], r[5]};
+    out_ = {r[6], r[7], r[8], r[9]};
+    load_noise_scale_ = r[10];
+    readings_rejected_ = r[11] == 1.0;
     *cursor += kSavedSize;
     return true;
 }
@@ -235,9 +324,7 @@ SmoothedTorque smooth_joint_states(const std::vector<JointFilterRecord>& records
         }
         const JointTorque T = joint_state_torque(xs, r.input, p);
         s.tau[j] = T.valid ? T.tau : std::nan("");
-        const double var = T.d_theta_l * T.d_theta_l * Ps(0, 0) + 2.0 * T.d_theta_l * T.d_delta * Ps(0, 2) +
-                           T.d_delta * T.d_delta * Ps(2, 2);
-        s.tau_std[j] = std::sqrt(std::max(var, 0.0));
+        s.tau_std[j] = std::sqrt(std::max(JointStateFilter::torque_variance(T, Ps), 0.0));
     }
     return s;
 }

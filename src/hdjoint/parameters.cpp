@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstring>
 #include <sstream>
+#include <utility>
 
 namespace hdjoint {
 
@@ -42,6 +43,17 @@ std::optional<std::string> validate(const Parameters& p, bool estimator, bool pl
             msg.precision(17);
             msg << "parameter " << info.name << " = " << v << " is outside its valid range ["
                 << info.min << ", " << info.max << "] " << info.unit;
+            return msg.str();
+        }
+    }
+    // An encoder with less than one count per revolution cannot quantise
+    // (2*pi/counts overflows for counts near 5e-324): 0 (off) or >= 1.
+    for (const auto& [name, counts] : {std::pair{"motor_counts", p.motor_counts}, std::pair{"link_counts", p.link_counts}}) {
+        if (counts != 0.0 && counts < kMinEncoderCounts) {
+            std::ostringstream msg;
+            msg.precision(17);
+            msg << "parameter " << name << " = " << counts << " is below " << kMinEncoderCounts
+                << " count per revolution; use 0 to disable quantisation";
             return msg.str();
         }
     }

@@ -43,8 +43,11 @@ bool in_plant(Scope s);
 constexpr long kMaxDelaySamples = 128;
 long delay_samples(const Parameters& p);
 
+// The fewest encoder counts per revolution that quantise (0 switches quantisation off).
+constexpr double kMinEncoderCounts = 1.0;
+
 // First problem with a parameter set (name and value), or nothing when the
-// whole set is valid. `scope_filter` checks only parameters the FMU carries.
+// whole set is valid. `estimator` / `plant` pick the parameters each FMU carries.
 std::optional<std::string> validate(const Parameters& p, bool estimator, bool plant);
 
 }  // namespace hdjoint

@@ -9,7 +9,15 @@
 namespace hdjoint {
 
 namespace {
-constexpr double kStateVersion = 3.0;
+constexpr double kStateVersion = 4.0;
+
+// std_nis_time: a deviation scaled by the running mean m of NIS/2 (2
+// measurements each), never below the filter's own.
+double consistent(double std, double nis, double Ts, double time, double* mean) {
+    if (time <= 0.0) return std;
+    if (std::isfinite(nis)) *mean += std::min(1.0, Ts / time) * (0.5 * nis - *mean);
+    return std * std::sqrt(std::max(1.0, *mean));
+}
 
 std::string describe_input(const EstimatorInputs& in) {
     std::ostringstream s;
@@ -72,7 +80,8 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
     const Vector<2>& x = ukf_.state();
     out_.tau_ukf = x(1);
     out_.omega_m = x(0);
-    out_.tau_ukf_std = std::sqrt(std::max(ukf_.covariance()(1, 1), 0.0));
+    out_.tau_ukf_std = consistent(std::sqrt(std::max(ukf_.covariance()(1, 1), 0.0)), update.nis, p_.Ts,
+                                  p_.std_nis_time, &nis_mean_ukf_);
     out_.tau_compliance = c.tau;
     out_.dtheta_f = c.dtheta_f;
     out_.nis = update.nis;
@@ -82,7 +91,7 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
     const double t = static_cast<double>(samples_) * p_.Ts;
     const FilterStatus joint = joint_.step(c.theta_m, c.theta_l, {in.i_m, c.z, t});
     out_.tau_hat = joint_.output().tau;
-    out_.tau_hat_std = joint_.output().tau_std;
+    out_.tau_hat_std = consistent(joint_.output().tau_std, joint_.output().nis, p_.Ts, p_.std_nis_time, &nis_mean_hat_);
     out_.load = joint_.output().load;
     // eq. (2)'s input, with cogging, Stribeck friction and the drift when they are on.
     previous_u_ = motor_torque(in.i_m, c.theta_m, p_) - coulomb_friction(x(0), p_, friction_drift_scale(t, p_));
@@ -101,13 +110,23 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
         case FilterStatus::UpdateSkipped:
             if (message) *message = "UKF innovation covariance is singular; measurement update skipped";
             return EstimatorStatus::UpdateSkipped;
+        case FilterStatus::SampleRejected:
+            if (message) {
+                std::ostringstream s;
+                s.precision(6);
+                s << "joint-state filter: sample " << samples_ - 1 << " rejected as an outlier (innovation NIS "
+                  << joint_.output().nis << " > " << kOutlierGate << ", or no torque explains it; i_m = " << in.i_m
+                  << " A); predicted over it, tau_hat_std grows";
+                *message = s.str();
+            }
+            return EstimatorStatus::SampleRejected;
     }
     return EstimatorStatus::Ok;
 }
 
 // [version, UKF state (2) and covariance (4), outputs (7), previous theta_m,
 //  previous u, samples, hysteresis torque, compliance model state, joint-state
-//  filter state, tau_hat outputs (3)]
+//  filter state, tau_hat outputs (3), NIS means of the UKF and the joint-state filter]
 std::vector<double> TorqueEstimator::save_state() const {
     const Vector<2>& x = ukf_.state();
     const Matrix<2>& P = ukf_.covariance();
@@ -117,7 +136,7 @@ std::vector<double> TorqueEstimator::save_state() const {
                              out_.hysteresis_torque};
     compliance_.save(&d);
     joint_.save(&d);
-    d.insert(d.end(), {out_.tau_hat, out_.tau_hat_std, out_.load});
+    d.insert(d.end(), {out_.tau_hat, out_.tau_hat_std, out_.load, nis_mean_ukf_, nis_mean_hat_});
     return d;
 }
 
@@ -126,11 +145,13 @@ bool TorqueEstimator::load_state(const std::vector<double>& d) {
     ComplianceModel compliance = compliance_;
     JointStateFilter joint = joint_;
     if (d.size() < cursor || d[0] != kStateVersion || !compliance.load(d, &cursor) || !joint.load(d, &cursor) ||
-        cursor + 3 != d.size())
+        cursor + 5 != d.size())
         return false;
     ukf_.state() << d[1], d[2];
     ukf_.covariance() << d[3], d[4], d[5], d[6];
     out_ = {d[7], d[8], d[9], d[10], d[11], d[12], d[16], d[cursor], d[cursor + 1], d[cursor + 2]};
+    nis_mean_ukf_ = d[cursor + 3];
+    nis_mean_hat_ = d[cursor + 4];
     previous_theta_m_ = d[13];
     previous_u_ = d[14];
     samples_ = static_cast<long>(d[15]);

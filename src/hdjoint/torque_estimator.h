@@ -37,6 +37,7 @@ enum class EstimatorStatus {
     CovarianceRepaired,  // the UKF repaired an indefinite covariance (can go on)
     CovarianceReset,     // the UKF reset its covariance (can go on)
     UpdateSkipped,       // the measurement update was skipped (can go on)
+    SampleRejected,      // the joint-state filter rejected an outlier sample and predicted over it (can go on)
     SingularTorsion,     // |Cf*Kf*dtheta_f| >= pi/2: no torque explains the torsion
     InvalidInput,        // NaN or infinite input
 };
@@ -79,6 +80,8 @@ private:
     EstimatorOutputs out_;
     double previous_theta_m_ = 0.0;
     double previous_u_ = 0.0;  // Kt*i_m - tau_fm of the previous sample
+    // Running means of NIS/2 of the paper UKF and the joint-state filter (std_nis_time).
+    double nis_mean_ukf_ = 1.0, nis_mean_hat_ = 1.0;
     long samples_ = 0;
 };
 

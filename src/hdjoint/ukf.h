@@ -7,6 +7,8 @@
 // symmetric, an indefinite covariance is repaired (or reset to the initial
 // one) and reported as a status instead of aborting, and the gain comes from
 // a solve, never an explicit inverse.
+#include <limits>
+
 #include "sigma_points.h"
 
 namespace hdjoint {
@@ -16,6 +18,7 @@ enum class FilterStatus {
     CovarianceRepaired,  // jitter was added to keep P positive definite
     CovarianceReset,     // P could not be factorised and was reset to P0
     UpdateSkipped,       // innovation covariance singular: measurement ignored
+    SampleRejected,      // the innovation failed the outlier gate: measurement (or input) ignored
 };
 
 template <int NX>
@@ -94,9 +97,12 @@ public:
     // (kLinear and a jacobian() matrix H) is updated exactly, with
     // Pzz = H P H^T + R and Pxz = P H^T: for a linear h that is what the
     // unscented transform computes, without drawing sigma points.
+    // A finite `gate` rejects an innovation whose NIS exceeds it (linear
+    // measurement models): the state is left as predicted, status SampleRejected.
     template <class Measurement>
     Update<Measurement::kSize> update(const Measurement& model, const typename Measurement::Vector& z,
-                        const typename Measurement::Covariance& R) {
+                        const typename Measurement::Covariance& R,
+                        double gate = std::numeric_limits<double>::infinity()) {
         constexpr int NZ = Measurement::kSize;
         Update<NZ> result;
         if constexpr (is_linear<Measurement>()) {
@@ -116,13 +122,17 @@ public:
                 result.status = FilterStatus::UpdateSkipped;
                 return result;
             }
+            result.nis = result.innovation.dot(solver.solve(result.innovation));
+            if (!(result.nis <= gate)) {
+                result.status = FilterStatus::SampleRejected;
+                return result;
+            }
             const Eigen::Matrix<double, NX, NZ> K =
                 solver.solve(Eigen::Matrix<double, NZ, NX>(Pxz.transpose())).transpose();
             x_ += K * result.innovation;
             // Joseph-free form; symmetrised. K Pzz K^T = K Pxz^T.
             P_ -= K * Pxz.transpose();
             symmetrize(&P_);
-            result.nis = result.innovation.dot(solver.solve(result.innovation));
             return result;
         }
         SigmaPoints<NX> chi;

@@ -80,7 +80,7 @@ TEST(EffectsState, EstimatorRestoresExactly) {
         for (int k = 0; k < split; ++k) ASSERT_TRUE(recoverable(a.step(inputs[k])));
         const std::vector<double> saved = a.save_state();
         // estimator, compliance model with a 3-sample delay line, joint-state filter, tau_hat outputs
-        EXPECT_EQ(saved.size(), 17u + 4u + 2u * 3u + JointStateFilter::kSavedSize + 3u);
+        EXPECT_EQ(saved.size(), 17u + 4u + 2u * 3u + JointStateFilter::kSavedSize + 3u + 2u);
         for (int k = split; k < 1000; ++k) ASSERT_TRUE(recoverable(a.step(inputs[k])));
         TorqueEstimator b(p);
         ASSERT_TRUE(b.load_state(saved));

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <limits>
+#include <string>
 #include <vector>
 
 #include "joint_plant.h"
@@ -57,8 +58,7 @@ TEST(JointStateFilter, FindsTheStaticLoadTheLinkModelDoesNotKnow) {
     const double i_hold = tau_true / (p.N * p.Kt);  // at rest the motor holds tau/N (no friction at rest)
     Parameters q = p;
     q.wg_load = 1.0;
-    q.jsf_mgl = 0.9 * p.mgl;
-    q.jsf_motor_counts = q.jsf_link_counts = 0.0;
+    q.mgl = 0.9 * p.mgl;
     q.jsf_r_theta_m = 1e-6;
     q.jsf_r_theta_l = 1e-8;
     JointStateFilter f(q);
@@ -69,7 +69,7 @@ TEST(JointStateFilter, FindsTheStaticLoadTheLinkModelDoesNotKnow) {
     }
     EXPECT_NEAR(f.output().tau, tau_true, 1e-3 * std::fabs(tau_true));
     // The load state took what the link model misses: tau_ext and the 10 % of gravity.
-    EXPECT_NEAR(f.output().load, tau_true - q.jsf_mgl * std::sin(plant.state()(2)), 0.02);
+    EXPECT_NEAR(f.output().load, tau_true - q.mgl * std::sin(plant.state()(2)), 0.02);
     EXPECT_GT(f.output().tau_std, 0.0);
 }
 
@@ -118,7 +118,7 @@ TEST(JointStateFilter, RecoversFromABrokenCovariance) {
     for (int k = 0; k < 400; ++k) ASSERT_EQ(a.step(inputs[k]), EstimatorStatus::Ok) << k;
     // Break the filter's covariance (what a failed factorisation leaves): NaN.
     std::vector<double> saved = a.save_state();
-    const std::size_t joint_start = saved.size() - 3 - JointStateFilter::kSavedSize;
+    const std::size_t joint_start = saved.size() - 5 - JointStateFilter::kSavedSize;
     saved[joint_start + 1 + kJointStates + 7] = std::numeric_limits<double>::quiet_NaN();
     TorqueEstimator b(p);
     ASSERT_TRUE(b.load_state(saved));
@@ -129,13 +129,53 @@ TEST(JointStateFilter, RecoversFromABrokenCovariance) {
     EXPECT_NEAR(b.outputs().tau_hat, a.outputs().tau_hat, 0.01);
 }
 
-TEST(JointStateFilter, InnovationCovarianceSingularSkipsTheUpdate) {
-    Parameters p;
-    JointStateFilter f(p);
-    f.step(0.0, 0.0, {0.0, 0.0, 0.0});
-    // A NaN reading gives a NaN innovation: the update is skipped, the state stays finite.
-    EXPECT_EQ(f.step(std::numeric_limits<double>::quiet_NaN(), 0.0, {0.0, 0.0, 1e-3}), FilterStatus::UpdateSkipped);
-    EXPECT_TRUE(f.state().allFinite());
+TEST(JointStateFilter, UnreadableSamplesArePredictedOverWithGrowingDeviation) {
+    const Parameters p;
+    const std::vector<EstimatorInputs> inputs = moving_joint(p, 700);
+    JointStateFilter f(p), clean(p);
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    double last_std = 0.0;
+    for (int k = 0; k < 700; ++k) {
+        const EstimatorInputs& in = inputs[k];
+        const JointInput u{in.i_m, 0.0, k * 1e-3};
+        clean.step(in.theta_m, in.theta_l, u);
+        if (k >= 400 && k < 410) {
+            // Ten unreadable samples: no update, the filter only predicts and says so.
+            EXPECT_EQ(f.step(nan, in.theta_l, u), FilterStatus::SampleRejected) << k;
+            EXPECT_TRUE(f.state().allFinite());
+            EXPECT_GT(f.output().tau_std, last_std) << k;
+        } else {
+            EXPECT_NE(f.step(in.theta_m, in.theta_l, u), FilterStatus::SampleRejected) << k;
+        }
+        last_std = f.output().tau_std;
+    }
+    EXPECT_NEAR(f.output().tau, clean.output().tau, 1e-3);
+}
+
+TEST(JointStateFilter, OneOutlierCurrentIsRejectedVisiblyAndTheFilterRecovers) {
+    // The audit's case (issue 12): one sample of i_m = 1e6 A used to freeze
+    // tau_hat with tau_hat_std = 0 and no message.
+    const Parameters p;
+    const std::vector<EstimatorInputs> inputs = moving_joint(p, 900);
+    TorqueEstimator a(p), clean(p);
+    int rejected = 0;
+    for (int k = 0; k < 900; ++k) {
+        EstimatorInputs in = inputs[k];
+        if (k == 400) in.i_m = 1e6;
+        clean.step(inputs[k]);
+        std::string message;
+        const EstimatorStatus s = a.step(in, &message);
+        ASSERT_TRUE(recoverable(s)) << k << ": " << message;
+        if (s == EstimatorStatus::SampleRejected) {
+            ++rejected;
+            EXPECT_NE(message.find("outlier"), std::string::npos) << message;
+        }
+        EXPECT_GT(a.outputs().tau_hat_std, 0.0) << k;
+        EXPECT_TRUE(std::isfinite(a.outputs().tau_hat)) << k;
+    }
+    EXPECT_EQ(rejected, 1);
+    EXPECT_NEAR(a.outputs().tau_hat, clean.outputs().tau_hat, 1e-3);
+    EXPECT_NEAR(a.outputs().tau_hat_std, clean.outputs().tau_hat_std, 1e-6);
 }
 
 TEST(JointStateFilter, SmootherEndsOnTheFilterAndBeatsItInBetween) {

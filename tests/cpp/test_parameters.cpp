@@ -7,6 +7,7 @@
 #include <limits>
 #include <set>
 #include <string>
+#include <utility>
 
 #include "parameters.h"
 
@@ -24,8 +25,8 @@ const Expected kContractNames[] = {
     {"Fc", true, true},       {"Kf", true, true},       {"Cf", true, true},       {"Kw", true, true},
     {"Cw", true, true},       {"a0", true, true},       {"al1", true, true},      {"bl1", true, true},
     {"omega_l", true, true},  {"aw1", true, true},      {"bw1", true, true},      {"aw2", true, true},
-    {"bw2", true, true},      {"omega_w", true, true},  {"Jl", false, true},      {"Bl", false, true},
-    {"mgl", false, true},     {"motor_counts", false, true}, {"link_counts", false, true},
+    {"bw2", true, true},      {"omega_w", true, true},  {"Jl", true, true},       {"Bl", true, true},
+    {"mgl", true, true},      {"motor_counts", true, true}, {"link_counts", true, true},
     {"ukf_alpha", true, false}, {"ukf_beta", true, false}, {"ukf_kappa", true, false},
 };
 
@@ -161,12 +162,33 @@ TEST(Parameters, ValidateRejectsOutOfRangeAndAcceptsBounds) {
     EXPECT_EQ(value_in_message(*msg), 0.02) << *msg;
 }
 
+TEST(Parameters, EncoderCountsTooFewToQuantiseAreRefused) {
+    // Issue 12: motor_counts = 5e-324 was in range and 2*pi/counts overflowed to inf.
+    for (const char* name : {"motor_counts", "link_counts"}) {
+        for (double counts : {5e-324, 1e-300, 0.5}) {
+            Parameters p;
+            p.*(parameter_table()[*find_parameter(name)].member) = counts;
+            for (auto [estimator, plant] : {std::pair{true, false}, std::pair{false, true}}) {
+                const auto msg = validate(p, estimator, plant);
+                ASSERT_TRUE(msg.has_value()) << name << " = " << counts;
+                EXPECT_NE(msg->find(name), std::string::npos) << *msg;
+                EXPECT_NE(msg->find("use 0 to disable"), std::string::npos) << *msg;
+            }
+        }
+        Parameters p;
+        p.*(parameter_table()[*find_parameter(name)].member) = 0.0;  // off
+        EXPECT_FALSE(validate(p, true, true).has_value());
+        p.*(parameter_table()[*find_parameter(name)].member) = 1.0;  // the fewest that quantise
+        EXPECT_FALSE(validate(p, true, true).has_value());
+    }
+}
+
 TEST(Parameters, ValidateChecksOnlyTheParametersTheFmuCarries) {
     Parameters p;
-    p.Jl = -1.0;  // plant only
+    p.Df = -1.0;  // plant only
     EXPECT_FALSE(validate(p, true, false).has_value());
     ASSERT_TRUE(validate(p, false, true).has_value());
-    EXPECT_NE(validate(p, false, true)->find("Jl"), std::string::npos);
+    EXPECT_NE(validate(p, false, true)->find("Df"), std::string::npos);
 
     Parameters q;
     q.ukf_alpha = 0.0;  // estimator only

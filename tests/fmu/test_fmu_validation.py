@@ -44,9 +44,10 @@ CONTRACT = {
 # Outputs the contract announces for later ("from the estimator issue on"): allowed, not required.
 CONTRACT_LATER = {ESTIMATOR: {"tau_hat": ("output", "N.m"), "tau_hat_std": ("output", "N.m")}, JOINT: {}}
 
+# "One joint, one parameter set": the link and encoders are shared too.
 CONTRACT_SHARED = ["N", "Kt", "Jm", "Bm", "Fc", "Kf", "Cf", "Kw", "Cw", "a0", "al1", "bl1", "omega_l",
-                   "aw1", "bw1", "aw2", "bw2", "omega_w"]
-CONTRACT_PLANT_ONLY = ["Jl", "Bl", "mgl", "motor_counts", "link_counts"]
+                   "aw1", "bw1", "aw2", "bw2", "omega_w", "Jl", "Bl", "mgl", "motor_counts", "link_counts"]
+CONTRACT_PLANT_ONLY = []
 CONTRACT_ESTIMATOR_ONLY = ["ukf_alpha", "ukf_beta", "ukf_kappa"]
 
 # SI base-unit exponents (kg, m, s, A, rad) of the units the contract uses.
@@ -146,6 +147,8 @@ def test_contract_parameter_names_and_scopes(fmu):
         assert p in v and v[p].causality == "parameter", f"{name}: contract parameter {p} missing"
     for p in unwanted:
         assert p not in v, f"{name}: {p} belongs to the other FMU"
+    # The joint-state filter's former copies of the joint's parameters are gone.
+    assert not [p for p in v if p in parameters.RENAMED], f"{name}: carries a removed jsf_* copy"
 
 
 def test_value_references_unique_per_causality(fmu):

@@ -146,18 +146,19 @@ def test_estimate_smooth_adds_tau_smooth_with_either_engine(simulated, tmp_path,
         code, stdout, err = run_cli(capsys, "estimate", simulated, "--engine", engine, "--smooth", "-o", out)
         assert code == 0, err
         header, data = read_csv(out)
-        assert header == ESTIMATE_COLUMNS + ["tau_smooth"]
+        assert header == ESTIMATE_COLUMNS + ["tau_smooth", "tau_smooth_std"]
         assert re.search(r"^tau_smooth\s+[\d.]+\s+[\d.]+\s*$", stdout, re.MULTILINE), stdout
         columns[engine] = data
     # The smoother is the batch path's in both cases: the same numbers.
-    np.testing.assert_array_equal(columns["fmu"][:, -1], columns["batch"][:, -1])
+    np.testing.assert_array_equal(columns["fmu"][:, -2:], columns["batch"][:, -2:])
     rec = read_recording(simulated)
     expected = _core.run_estimator(estimator_params, rec.time, rec.i_m, rec.theta_m, rec.theta_l, smooth=True)
-    np.testing.assert_array_equal(columns["batch"][:, -1], expected["tau_smooth"])
+    np.testing.assert_array_equal(columns["batch"][:, -2], expected["tau_smooth"])
+    np.testing.assert_array_equal(columns["batch"][:, -1], expected["tau_smooth_std"])
     # Smoothing uses the future: it differs from the causal tau_hat. (Whether it is
     # closer to the truth depends on the model: this joint is not the nominal one.)
     hat = columns["batch"][:, ESTIMATE_COLUMNS.index("tau_hat")]
-    assert not np.array_equal(hat, columns["batch"][:, -1])
+    assert not np.array_equal(hat, columns["batch"][:, -2])
 
 
 def test_estimate_without_tau_sensor_prints_no_error_figures(rec_csv, tmp_path, capsys):

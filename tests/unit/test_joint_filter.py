@@ -69,14 +69,19 @@ def test_smoother_needs_no_future_for_the_last_sample(batch):
     assert np.any(batch["tau_smooth"][:-1] != batch["tau_hat"][:-1])
 
 
-def test_filter_beats_compliance_model_with_coarse_encoders_and_unknown_load():
-    # Closed loop, contact pushes unknown to everyone, 15-bit link / 2048-count
-    # motor encoders, the filter's link model 5 % off: a short benchmark case.
+@pytest.fixture(scope="module")
+def coarse_run():
+    """Closed loop, contact pushes unknown to everyone, 15-bit link / 2048-count
+    motor encoders, the filter's link model 5 % off: a short benchmark case."""
     joint = {**parameters.defaults(), "motor_counts": 2048.0, "link_counts": 32768.0}
     rec = experiments.run("multisine", joint=joint, nominal=parameters.defaults(), duration=6.0,
                           tau_ext=experiments.contact_pushes)
-    p = {**parameters.defaults(), "wg_load": 1.0, "jsf_motor_counts": 2048.0, "jsf_link_counts": 32768.0,
-         "jsf_Jl": 1.05 * joint["Jl"], "jsf_mgl": 0.96 * joint["mgl"]}
+    p = {**joint, "wg_load": 1.0, "Jl": 1.05 * joint["Jl"], "mgl": 0.96 * joint["mgl"]}
+    return rec, p
+
+
+def test_filter_beats_compliance_model_with_coarse_encoders_and_unknown_load(coarse_run):
+    rec, p = coarse_run
     est = _core.run_estimator(parameters.for_estimator(p), rec.time, rec.i_m, rec.theta_m, rec.theta_l, smooth=True)
     truth = rec.extra["tau_joint"]
     base = error_figures(est["tau_compliance"], truth)
@@ -85,3 +90,75 @@ def test_filter_beats_compliance_model_with_coarse_encoders_and_unknown_load():
     # The standard deviation is of the right order: most errors within 3 sigma.
     err = np.abs(est["tau_hat"] - truth)
     assert np.mean(err < 3.0 * est["tau_hat_std"] + 0.02) > 0.9
+
+
+def test_nis_scaled_deviations_are_honest_where_the_papers_ukf_is_overconfident(coarse_run):
+    # Coverage of +-2 sigma (95 % when honest). The paper's UKF on coarse
+    # encoders believes itself far too much; std_nis_time widens each
+    # deviation by the innovations it did not expect (benchmark: 93-95 %).
+    # The UKF's settings are the benchmark's tuning for these encoders: a
+    # grossly mistuned filter (the defaults' ukf_r_torsion here) stays dishonest.
+    rec, p = coarse_run
+    p = {**p, "ukf_q_tau": 0.1, "ukf_r_torsion": 6e-5, "ukf_r_omega": 0.3}
+    truth = rec.extra["tau_joint"][1000:]  # after the start-up
+    coverage = {}
+    for t in (0.0, 0.05):
+        est = _core.run_estimator(parameters.for_estimator({**p, "std_nis_time": t}), rec.time, rec.i_m,
+                                  rec.theta_m, rec.theta_l)
+        for name in ("tau_ukf", "tau_hat"):
+            e = np.abs(est[name][1000:] - truth)
+            coverage[name, t] = 100.0 * np.mean(e <= 2.0 * est[name + "_std"][1000:])
+    assert coverage["tau_ukf", 0.0] < 80.0, coverage
+    assert 90.0 <= coverage["tau_ukf", 0.05] <= 99.0, coverage
+    assert 90.0 <= coverage["tau_hat", 0.05] <= 99.0, coverage
+
+
+def test_the_filter_takes_the_joints_own_link_and_encoder_parameters(short_recording, params, batch):
+    # One joint, one parameter set: Jl, Bl, mgl and the encoder resolutions
+    # reach the joint-state filter in the batch path and in the FMU alike.
+    r = short_recording
+    joint = {**params, "Jl": 3.0 * params["Jl"], "mgl": 0.5 * params["mgl"], "motor_counts": 1024.0}
+    other = _core.run_estimator(joint, r.time, r.i_m, r.theta_m, r.theta_l)
+    assert np.max(np.abs(other["tau_hat"] - batch["tau_hat"])) > 1e-3
+    assert np.max(np.abs(other["tau_hat_std"] - batch["tau_hat_std"])) > 1e-4  # coarser motor encoder
+    fmu = run_estimator_fmu(r.time, r.i_m, r.theta_m, r.theta_l, joint)
+    np.testing.assert_array_equal(fmu["tau_hat"], other["tau_hat"])
+
+
+def test_a_file_with_the_former_filter_copies_is_refused_naming_the_replacements(tmp_path):
+    path = tmp_path / "old.json"
+    path.write_text('{"jsf_Jl": 0.057, "jsf_link_counts": 32768, "Kt": 0.05}')
+    with pytest.raises(parameters.ParameterError) as e:
+        parameters.load(path)
+    assert "'jsf_Jl' is now 'Jl'" in str(e.value) and "'jsf_link_counts' is now 'link_counts'" in str(e.value)
+
+
+@pytest.mark.parametrize("name", ["motor_counts", "link_counts"])
+def test_encoder_counts_too_few_to_quantise_are_refused(name):
+    # Issue 12: 5e-324 was in range and 2*pi/counts overflowed.
+    with pytest.raises(parameters.ParameterError, match=name):
+        parameters.check({name: 5e-324})
+    assert parameters.check({name: 0.0}) == {name: 0.0}
+
+
+def test_estimate_skips_one_outlier_current_visibly(short_recording, tmp_path, capsys):
+    # Issue 12: one sample of i_m = 1e6 A froze tau_hat (RMS error 261 N.m, exit 0, no message).
+    import dataclasses
+
+    from hdjoint import cli
+    from hdjoint.recording import write_recording
+    r = short_recording
+    i_m = r.i_m.copy()
+    i_m[300] = 1e6
+    write_recording(tmp_path / "run.csv", dataclasses.replace(r, i_m=i_m))
+    assert cli.main(["estimate", str(tmp_path / "run.csv"), "--smooth", "-o", str(tmp_path / "est.csv")]) == 0
+    err = capsys.readouterr().err
+    assert err.count("warning:") == 1 and "rejected as an outlier" in err, err
+    est = np.genfromtxt(tmp_path / "est.csv", delimiter=",", names=True)
+    clean = _core.run_estimator(parameters.for_estimator(parameters.defaults()), r.time, r.i_m, r.theta_m,
+                                r.theta_l)
+    # The outlier current is found one sample later (it is held over the next
+    # sample); from then on tau_hat is the clean run's, to a few mN.m.
+    after = np.arange(len(r.time)) > 300
+    assert np.max(np.abs(est["tau_hat"] - clean["tau_hat"])[after]) < 0.02
+    assert np.all(est["tau_hat_std"] > 0.0)
