@@ -8,7 +8,6 @@ from fmi_fuzzer import FMU_NAMES, Campaign
 from hdjoint.fmus import fmu_path
 
 ARCH_FMU = pytest.mark.xfail(strict=True, reason="FMU fixes of issue 12 land from branch arch-fmu")
-ESTIMATOR_BRANCH = pytest.mark.xfail(strict=True, reason="parameter range fix of issue 12 lands from branch estimator")
 START = [["instantiate"], ["setup", 0.0, None], ["enter"], ["exit"]]
 
 REPRODUCERS = {
@@ -34,7 +33,7 @@ REPRODUCERS = {
     "encoder counts too small to quantise": (
         "HarmonicDriveJoint", [["instantiate"], ["setup", 0.0, None], ["set", "motor_counts", 5e-324], ["enter"],
                                ["exit"], ["step", 0.0, 1e-3], ["get", ["theta_m", "theta_l", "tau_joint"]]],
-        ESTIMATOR_BRANCH),
+        ()),
 }
 
 
