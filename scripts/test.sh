@@ -19,4 +19,15 @@ cmake -S . -B build/cpp-tests -G Ninja -DHDJOINT_BUILD_TESTS=ON -DHDJOINT_BUILD_
 cmake --build build/cpp-tests
 ctest --test-dir build/cpp-tests --output-on-failure
 
+# The same C++ tests and the FMUs built with AddressSanitizer and UBSan (any
+# finding aborts), in their own build dir; then fmpy runs each sanitized FMU
+# and the JointTorqueFeedback system, with the ASan runtime preloaded into
+# the Python host (whose own allocations are not ours to leak-check).
+cmake -S . -B build/sanitize -G Ninja -DHDJOINT_SANITIZE=ON -DHDJOINT_BUILD_TESTS=ON -DCMAKE_BUILD_TYPE=Sanitize \
+    -DPython_EXECUTABLE="$(command -v python3)" >/dev/null
+cmake --build build/sanitize
+ctest --test-dir build/sanitize --output-on-failure
+LD_PRELOAD="$(g++ -print-file-name=libasan.so)" ASAN_OPTIONS=detect_leaks=0 \
+    python3 scripts/run_sanitized_fmus.py build/sanitize
+
 python3 -m pytest -q tests "$@"

@@ -13,7 +13,7 @@ import numpy as np
 
 from .jobs import UserError, check_output_file, read_params
 from .metrics import RunningErrorFigures
-from .recording import CsvWriter, Recording, RecordingError, iter_recording
+from .recording import CHUNK_ROWS, CsvWriter, Recording, RecordingError, iter_recording
 from .timebase import TIME_UNITS, TimeBaseError, check_step, describe, irregular_steps
 
 FIGURES_OF = ("tau_compliance", "tau_ukf", "tau_hat")
@@ -265,7 +265,8 @@ def _whole(opts: Options, blocks: TimedBlocks, params: dict) -> dict:
         parts.append({"time": r["time"], **{name: est[name] for name in names}})
     columns = {name: np.concatenate([p[name] for p in parts]) for name in ["time", *names]}
     with CsvWriter(opts.output, list(columns)) as out:
-        out.write(columns)
+        for start in range(0, len(columns["time"]), CHUNK_ROWS):  # formatted text a block at a time
+            out.write({name: values[start:start + CHUNK_ROWS] for name, values in columns.items()})
     sensors = [p.tau_sensor for pieces in segments for p in pieces]
     if any(s is None for s in sensors):
         return {}

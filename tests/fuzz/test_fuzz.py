@@ -11,6 +11,7 @@ from hdjoint.fmus import fmu_path
 
 SEQUENCES_PER_FMU = 80
 TIMEOUT = 1.5  # s: a normal sequence takes ~50 ms
+pytestmark = pytest.mark.slow  # one shared fuzz run: ~20 s
 ARCH_FMU = pytest.mark.xfail(strict=True, reason="FMU fixes of issue 12 land from branch arch-fmu")
 
 

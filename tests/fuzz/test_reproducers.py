@@ -7,6 +7,7 @@ import pytest
 from fmi_fuzzer import FMU_NAMES, Campaign
 from hdjoint.fmus import fmu_path
 
+pytestmark = pytest.mark.slow  # the hang reproducers wait out their budget
 ARCH_FMU = pytest.mark.xfail(strict=True, reason="FMU fixes of issue 12 land from branch arch-fmu")
 START = [["instantiate"], ["setup", 0.0, None], ["enter"], ["exit"]]
 
