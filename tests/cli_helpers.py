@@ -2,8 +2,10 @@
 from __future__ import annotations
 
 import csv
+import shutil
 
 import numpy as np
+import pytest
 
 from hdjoint.cli import main
 
@@ -42,4 +44,22 @@ def rewrite(path, edit):
         w = csv.writer(f, lineterminator="\n")
         w.writerow(header)
         w.writerows(body)
+    return path
+
+
+# Fixtures, imported by the test modules that use them (a conftest.py in
+# tests/unit would shadow the root one's module name `conftest`).
+@pytest.fixture(scope="session")
+def simulated(tmp_path_factory):
+    """`hdjoint simulate --duration 2 -o rec.csv`, once per session."""
+    d = tmp_path_factory.mktemp("sim")
+    path = d / "rec.csv"
+    assert main(["simulate", "--duration", "2", "-o", str(path)]) == 0
+    return path
+
+
+@pytest.fixture
+def rec_csv(simulated, tmp_path):
+    path = tmp_path / "rec.csv"
+    shutil.copyfile(simulated, path)
     return path

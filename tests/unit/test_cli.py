@@ -19,7 +19,7 @@ from hdjoint.fmu_runner import run_estimator_fmu
 from hdjoint.fmus import FMU_NAMES, fmu_path
 from hdjoint.recording import read_recording
 
-from cli_helpers import assert_one_line_error, files_in, read_csv, rewrite, run_cli
+from cli_helpers import assert_one_line_error, files_in, read_csv, rec_csv, rewrite, run_cli, simulated  # noqa: F401 (fixtures)
 
 ESTIMATE_COLUMNS = ["time", "tau_ukf", "tau_compliance", "omega_m", "dtheta_f", "tau_ukf_std", "tau_hat", "tau_hat_std"]
 

@@ -13,7 +13,7 @@ import pytest
 from hdjoint import _core, parameters
 from hdjoint.recording import iter_recording, read_recording, write_recording
 
-from cli_helpers import assert_one_line_error, files_in, read_csv, run_cli
+from cli_helpers import assert_one_line_error, files_in, read_csv, rec_csv, run_cli, simulated  # noqa: F401 (fixtures)
 
 
 def scaled_time(rec_csv, factor):
