@@ -80,8 +80,9 @@ def connect(scheduler: str | None, workers: int | None, allowed_failures: int):
         # The scheduler's own configuration sets its allowed-failures there.
         return Client(scheduler)
     with dask.config.set({"distributed.scheduler.allowed-failures": allowed_failures}):
+        # ":0": any free port, so two fleets on one machine do not contend for 8787.
         cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                               dashboard_address=":0" if has_dashboard() else None)
+                               dashboard_address=":0")
     return Client(cluster)
 
 
