@@ -156,3 +156,14 @@ def test_kinematic_amplitudes_split_motor_and_link_orders_with_intervals():
     value, lo, hi = trend.quantity(row, trend.KINEMATIC_MOTOR)
     # d(amplitude)/d(coefficient) = c / (2 * amplitude): only aw1 and bw1 contribute, each 2e-6 wide.
     assert hi - value == pytest.approx(2e-6 * math.hypot(3e-5, 4e-5) / (2 * value))
+
+
+def test_progress_line_counts_done_failed_remaining_with_an_eta():
+    import io
+    from hdjoint.fleet.run import Progress
+    stream = io.StringIO()
+    progress = Progress(10, 2, stream=stream)
+    progress.update(failed=False)
+    progress.update(failed=True, final=True)
+    line = stream.getvalue().strip().splitlines()[-1]
+    assert "3/10 done (2 earlier), 1 failed, 6 remaining, ETA " in line and "ETA ?" not in line
