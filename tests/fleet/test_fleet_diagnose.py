@@ -12,7 +12,7 @@ import pytest
 from matplotlib.image import imread
 
 from hdjoint import cli
-from hdjoint.fleet.generate import FC_GROWTH, JOINT_PATTERN, generate
+from hdjoint.fleet.generate import JOINT_PATTERN, Drift, generate
 from hdjoint.jobs import diagnose_to_directory
 
 pytestmark = pytest.mark.slow  # diagnoses: several seconds each
@@ -23,7 +23,8 @@ CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 @pytest.fixture(scope="module")
 def diagnosed(tmp_path_factory, fleet_client):
     root = tmp_path_factory.mktemp("fleet")
-    pmap = generate(root, joints=1, days=3, duration=4.0, drifts={"j1": FC_GROWTH})
+    # Fc +10 % a day: +20 % over the three days, inside the diagnosis' calibration range.
+    pmap = generate(root, joints=1, days=3, duration=4.0, drifts={"j1": Drift(("Fc",), 0.10, "coulomb_friction")})
     (root / "logs" / "robot1" / "j1" / "2026-03-09.csv").write_text("time,i_m,theta_m\n0,0,0\n0.001,0,0\n")
     fleet_client.wait_for_workers(2, timeout=120)
     out = root / "out"

@@ -143,3 +143,27 @@ def test_the_command_line_names_bad_input_in_one_line(tree, capsys):
     assert code == 2 and len(err.splitlines()) == 1
     assert err.startswith("hdjoint fleet:") and "2026-01-01.csv: no pattern of the params map matches" in err
     assert not (tree / "out").exists()
+
+
+def test_kinematic_amplitudes_split_motor_and_link_orders_with_intervals():
+    row = {"param.aw1": 3e-5, "param.bw1": 4e-5, "param.aw2": 0.0, "param.bw2": 0.0, "param.ke_m1_a": 0.0,
+           "param.ke_m1_b": 0.0, "param.ke_m1_order": 3.0, "param.al1": 1e-4, "param.bl1": -1e-4}
+    value, lo, hi = trend.quantity(row, trend.KINEMATIC_MOTOR)
+    assert value == pytest.approx(5e-5 / math.sqrt(2)) and math.isnan(lo)
+    assert trend.quantity(row, trend.KINEMATIC_LINK)[0] == pytest.approx(1e-4)
+    for name in ("aw1", "bw1", "aw2", "bw2", "ke_m1_a", "ke_m1_b"):
+        row[f"param.{name}.lo"], row[f"param.{name}.hi"] = row[f"param.{name}"] - 2e-6, row[f"param.{name}"] + 2e-6
+    value, lo, hi = trend.quantity(row, trend.KINEMATIC_MOTOR)
+    # d(amplitude)/d(coefficient) = c / (2 * amplitude): only aw1 and bw1 contribute, each 2e-6 wide.
+    assert hi - value == pytest.approx(2e-6 * math.hypot(3e-5, 4e-5) / (2 * value))
+
+
+def test_progress_line_counts_done_failed_remaining_with_an_eta():
+    import io
+    from hdjoint.fleet.run import Progress
+    stream = io.StringIO()
+    progress = Progress(10, 2, stream=stream)
+    progress.update(failed=False)
+    progress.update(failed=True, final=True)
+    line = stream.getvalue().strip().splitlines()[-1]
+    assert "3/10 done (2 earlier), 1 failed, 6 remaining, ETA " in line and "ETA ?" not in line

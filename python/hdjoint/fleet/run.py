@@ -80,8 +80,9 @@ def connect(scheduler: str | None, workers: int | None, allowed_failures: int):
         # The scheduler's own configuration sets its allowed-failures there.
         return Client(scheduler)
     with dask.config.set({"distributed.scheduler.allowed-failures": allowed_failures}):
+        # ":0": any free port, so two fleets on one machine do not contend for 8787.
         cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                               dashboard_address=":0" if has_dashboard() else None)
+                               dashboard_address=":0")
     return Client(cluster)
 
 
@@ -141,7 +142,9 @@ def run_fleet(command: str, patterns: list[str], out: str | os.PathLike, params_
         try:
             if show_progress:
                 n = len(client.scheduler_info().get("workers", {}))
-                link = client.dashboard_link if has_dashboard() else None
+                # A remote scheduler has its own dashboard (or none); a local one needs bokeh here.
+                services = client.scheduler_info().get("services", {})
+                link = client.dashboard_link if ("dashboard" in services if scheduler else has_dashboard()) else None
                 print(f"[fleet] {len(todo)} to {command} on {n} workers ({summary.cached} done earlier)"
                       + (f"; dashboard {link}" if link else ""), file=sys.stderr, flush=True)
             new = compute(client, command, [j for j, _ in todo], [k for _, k in todo], out, options, progress)

@@ -20,7 +20,7 @@ from datetime import datetime
 import numpy as np
 from scipy import stats
 
-from ..effects import EFFECTS, KINEMATIC_EQ7
+from ..effects import EFFECTS
 
 ALPHA = 0.05
 # A drift matters when the fitted change over the observed period reaches the
@@ -29,12 +29,20 @@ ALPHA = 0.05
 # a joint to service.
 RELEVANT_CHANGE = 0.10
 Z95 = stats.norm.ppf(0.975)
-KINEMATIC_AMPLITUDE = "kinematic_error_amplitude"
+# The kinematic error's amplitude (RMS over a revolution of its harmonic
+# terms), at the motor angle's orders (wave generator: eq. (7) aw/bw and the
+# extra ke_m slots) and at the link angle's (al1/bl1, ke_l slots) apart: the
+# link orders move slowly in most recordings and trade off against gravity,
+# so their scatter must not drown the motor orders' trend.
+KINEMATIC_MOTOR = "kinematic_error_motor_orders"
+KINEMATIC_LINK = "kinematic_error_link_orders"
+KINEMATIC_TERMS = {KINEMATIC_MOTOR: (("aw1", "bw1", "aw2", "bw2"), "param.ke_m"),
+                   KINEMATIC_LINK: (("al1", "bl1"), "param.ke_l")}
 # What is followed over time, in the order the report shows it.
-TRACKED = ("Fc", KINEMATIC_AMPLITUDE, "Kf", "Kt", "Jm", "Bm", "Cf", "Kw", "Fs", "hys_H", "backlash")
+TRACKED = ("Fc", KINEMATIC_MOTOR, KINEMATIC_LINK, "Kf", "Kt", "Jm", "Bm", "Cf", "Kw", "Fs", "hys_H", "backlash")
 # Parameters that are not an effect's of the library: named for the report.
 NAMED = {"Kf": "flexspline stiffness", "Kt": "torque constant", "Jm": "motor inertia",
-         KINEMATIC_AMPLITUDE: "kinematic_error"}
+         KINEMATIC_MOTOR: "kinematic_error", KINEMATIC_LINK: "kinematic_error"}
 
 
 def effect_of(quantity: str) -> str:
@@ -93,19 +101,19 @@ def _get(row: dict, column: str) -> float:
         return math.nan
 
 
-def kinematic_slots(row: dict) -> list[str]:
-    extra = [c[len("param."):] for c in row if c.startswith("param.ke_") and c.endswith(("_a", "_b"))]
-    return list(KINEMATIC_EQ7) + extra
+def kinematic_terms(row: dict, quantity: str) -> list[str]:
+    eq7, prefix = KINEMATIC_TERMS[quantity]
+    extra = [c[len("param."):] for c in row if c.startswith(prefix) and c.endswith(("_a", "_b"))]
+    return list(eq7) + extra
 
 
 def quantity(row: dict, name: str) -> tuple[float, float, float]:
-    """(value, lo, hi) of a tracked quantity in a row; the kinematic error's
-    amplitude is the RMS over a revolution of every harmonic term, its
-    interval from the terms' intervals (first order)."""
-    if name != KINEMATIC_AMPLITUDE:
+    """(value, lo, hi) of a tracked quantity in a row; a kinematic error
+    amplitude's interval comes from its terms' intervals (first order)."""
+    if name not in KINEMATIC_TERMS:
         return _get(row, f"param.{name}"), _get(row, f"param.{name}.lo"), _get(row, f"param.{name}.hi")
     coeffs, ses = [], []
-    for slot in kinematic_slots(row):
+    for slot in kinematic_terms(row, name):
         c = _get(row, f"param.{slot}")
         if not math.isfinite(c):
             continue
@@ -154,6 +162,8 @@ def joint_trend(joint: str, joint_rows: list[dict]) -> JointDrift:
             continue
         slope, t, p = result
         first = v[keep, 0][np.argmin(days[keep])]
+        # Relative to the first value; to the typical one when the first is 0 (an effect that appears).
+        first = first if first else float(np.mean(np.abs(v[keep, 0])))
         moved = abs(slope) * np.ptp(days[keep])
         tolerance = np.nanmedian([_get(r, f"param.{name}.tol") for r in ok]) if any(
             f"param.{name}.tol" in r for r in ok) else math.nan
