@@ -44,7 +44,7 @@ constexpr long kMaxDelaySamples = 128;
 long delay_samples(const Parameters& p);
 
 // First problem with a parameter set (name and value), or nothing when the
-// whole set is valid. `scope_filter` checks only parameters the FMU carries.
+// whole set is valid. `estimator` and `plant` check only the parameters those carry.
 std::optional<std::string> validate(const Parameters& p, bool estimator, bool plant);
 
 }  // namespace hdjoint
