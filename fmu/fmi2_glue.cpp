@@ -126,9 +126,12 @@ std::string format_value(double v) {
     return buf;
 }
 
-fmi2Status no_such_variables(Instance* instance, const char* function, size_t nvr, const char* type) {
+// The Integer, Boolean and String calls: legal in `states`, but this FMU has no such variables.
+fmi2Status no_such_variables(fmi2Component c, const char* function, unsigned states, size_t nvr, const char* type) {
+    auto* in = static_cast<Instance*>(c);
+    if (!allowed(in, function, states)) return fmi2Error;
     if (nvr == 0) return fmi2OK;
-    return instance->error(std::string(function) + ": this FMU has no " + type + " variables");
+    return in->error(std::string(function) + ": this FMU has no " + type + " variables");
 }
 
 // Serialised layout: magic, version, state, time, start, stop, stop-defined,
@@ -157,6 +160,32 @@ std::string state_problem(const SavedState& s) {
         return std::string("state '") + state_name(s.state) + "' needs an initialised model, but the model was never "
                "initialised";
     return "";
+}
+
+// A call that only moves the state machine, from one of `from` to `to`.
+fmi2Status transition(fmi2Component c, const char* function, unsigned from, State to) {
+    auto* in = static_cast<Instance*>(c);
+    if (!allowed(in, function, from)) return fmi2Error;
+    in->state = to;
+    return fmi2OK;
+}
+
+// An fmi2Get*Status call: after a step (not in the error state), the one
+// kind this type reports (`known`, with `answer(instance)`), fmi2Discard for
+// any other: doStep is synchronous, so nothing is ever pending.
+template <class T>
+fmi2Status report_status(fmi2Component c, const char* function, fmi2StatusKind, T*) {
+    auto* in = static_cast<Instance*>(c);
+    return allowed(in, function, kCanGetStatus) ? fmi2Discard : fmi2Error;
+}
+template <class T, class Answer>
+fmi2Status report_status(fmi2Component c, const char* function, fmi2StatusKind asked, T* value,
+                         fmi2StatusKind known, Answer answer) {
+    auto* in = static_cast<Instance*>(c);
+    if (!allowed(in, function, kCanGetStatus)) return fmi2Error;
+    if (asked != known || !value) return fmi2Discard;
+    *value = answer(*in);
+    return fmi2OK;
 }
 
 }  // namespace
@@ -226,10 +255,7 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean /*toleranceDefined*/
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
-    auto* in = static_cast<Instance*>(c);
-    if (!allowed(in, "fmi2EnterInitializationMode", kInstantiated)) return fmi2Error;
-    in->state = kInitializationMode;
-    return fmi2OK;
+    return transition(c, "fmi2EnterInitializationMode", kInstantiated, kInitializationMode);
 }
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
@@ -242,11 +268,9 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     });
 }
 
+// Not in the error state (FMI 2.0, 4.2.4): only after a step.
 fmi2Status fmi2Terminate(fmi2Component c) {
-    auto* in = static_cast<Instance*>(c);
-    if (!allowed(in, "fmi2Terminate", kStepComplete | kStepFailed)) return fmi2Error;
-    in->state = kTerminated;
-    return fmi2OK;
+    return transition(c, "fmi2Terminate", kStepComplete | kStepFailed, kTerminated);
 }
 
 fmi2Status fmi2Reset(fmi2Component c) {
@@ -301,34 +325,22 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
 }
 
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference[], size_t nvr, fmi2Integer[]) {
-    auto* in = static_cast<Instance*>(c);
-    if (!allowed(in, "fmi2GetInteger", kCanGet)) return fmi2Error;
-    return no_such_variables(in, "fmi2GetInteger", nvr, "Integer");
+    return no_such_variables(c, "fmi2GetInteger", kCanGet, nvr, "Integer");
 }
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference[], size_t nvr, fmi2Boolean[]) {
-    auto* in = static_cast<Instance*>(c);
-    if (!allowed(in, "fmi2GetBoolean", kCanGet)) return fmi2Error;
-    return no_such_variables(in, "fmi2GetBoolean", nvr, "Boolean");
+    return no_such_variables(c, "fmi2GetBoolean", kCanGet, nvr, "Boolean");
 }
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference[], size_t nvr, fmi2String[]) {
-    auto* in = static_cast<Instance*>(c);
-    if (!allowed(in, "fmi2GetString", kCanGet)) return fmi2Error;
-    return no_such_variables(in, "fmi2GetString", nvr, "String");
+    return no_such_variables(c, "fmi2GetString", kCanGet, nvr, "String");
 }
 fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference[], size_t nvr, const fmi2Integer[]) {
-    auto* in = static_cast<Instance*>(c);
-    if (!allowed(in, "fmi2SetInteger", kCanSet)) return fmi2Error;
-    return no_such_variables(in, "fmi2SetInteger", nvr, "Integer");
+    return no_such_variables(c, "fmi2SetInteger", kCanSet, nvr, "Integer");
 }
 fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference[], size_t nvr, const fmi2Boolean[]) {
-    auto* in = static_cast<Instance*>(c);
-    if (!allowed(in, "fmi2SetBoolean", kCanSet)) return fmi2Error;
-    return no_such_variables(in, "fmi2SetBoolean", nvr, "Boolean");
+    return no_such_variables(c, "fmi2SetBoolean", kCanSet, nvr, "Boolean");
 }
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference[], size_t nvr, const fmi2String[]) {
-    auto* in = static_cast<Instance*>(c);
-    if (!allowed(in, "fmi2SetString", kCanSet)) return fmi2Error;
-    return no_such_variables(in, "fmi2SetString", nvr, "String");
+    return no_such_variables(c, "fmi2SetString", kCanSet, nvr, "String");
 }
 
 // ---- FMU state ------------------------------------------------------------
@@ -494,38 +506,22 @@ fmi2Status fmi2CancelStep(fmi2Component c) {
     return in->error("fmi2CancelStep: doStep never runs asynchronously, there is nothing to cancel");
 }
 
-fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind, fmi2Status*) {
-    auto* in = static_cast<Instance*>(c);
-    if (!allowed(in, "fmi2GetStatus", kCanGetStatus)) return fmi2Error;
-    return fmi2Discard;  // doStep is synchronous: there is no pending status
+fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status* value) {
+    return report_status(c, "fmi2GetStatus", s, value);
 }
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real* value) {
-    auto* in = static_cast<Instance*>(c);
-    if (!allowed(in, "fmi2GetRealStatus", kCanGetStatus)) return fmi2Error;
-    if (s == fmi2LastSuccessfulTime && value) {
-        *value = in->time;
-        return fmi2OK;
-    }
-    return fmi2Discard;
+    return report_status(c, "fmi2GetRealStatus", s, value, fmi2LastSuccessfulTime,
+                         [](const Instance& in) { return fmi2Real{in.time}; });
 }
-fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind, fmi2Integer*) {
-    auto* in = static_cast<Instance*>(c);
-    if (!allowed(in, "fmi2GetIntegerStatus", kCanGetStatus)) return fmi2Error;
-    return fmi2Discard;
+fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer* value) {
+    return report_status(c, "fmi2GetIntegerStatus", s, value);
 }
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean* value) {
-    auto* in = static_cast<Instance*>(c);
-    if (!allowed(in, "fmi2GetBooleanStatus", kCanGetStatus)) return fmi2Error;
-    if (s == fmi2Terminated && value) {
-        *value = fmi2False;
-        return fmi2OK;
-    }
-    return fmi2Discard;
+    return report_status(c, "fmi2GetBooleanStatus", s, value, fmi2Terminated,
+                         [](const Instance&) { return fmi2Boolean{fmi2False}; });
 }
-fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind, fmi2String*) {
-    auto* in = static_cast<Instance*>(c);
-    if (!allowed(in, "fmi2GetStringStatus", kCanGetStatus)) return fmi2Error;
-    return fmi2Discard;
+fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String* value) {
+    return report_status(c, "fmi2GetStringStatus", s, value);
 }
 
 }  // extern "C"
