@@ -1,5 +1,8 @@
 #include "description.h"
 
+#include "hdjoint/joint_plant.h"
+#include "hdjoint/sample_clock.h"
+
 #include <cstdint>
 #include <cstdio>
 #include <map>
@@ -86,6 +89,20 @@ std::uint64_t fnv1a(const std::string& s, std::uint64_t seed) {
     return h;
 }
 
+// The 1-based indices of the inputs an output's initial value depends on.
+std::string initial_dependencies(const ModelInfo& info, const Variable& output) {
+    std::istringstream names(output.initial_dependencies);
+    std::string name, indices;
+    while (names >> name) {
+        std::size_t index = 0;
+        for (std::size_t i = 0; i < info.variables.size() && !index; ++i)
+            if (info.variables[i].name == name && info.variables[i].causality == Causality::Input) index = i + 1;
+        if (!index) throw std::runtime_error("output " + output.name + " depends on '" + name + "', not an input");
+        indices += (indices.empty() ? "" : " ") + std::to_string(index);
+    }
+    return indices;
+}
+
 }  // namespace
 
 std::string guid(const ModelInfo& info) {
@@ -150,7 +167,11 @@ std::string model_description_xml(const ModelInfo& info, const std::vector<std::
     // so masters see no algebraic loop when a controller closes the loop.
     for (std::size_t k : outputs) x << "      <Unknown index=\"" << k << "\" dependencies=\"\"/>\n";
     x << "    </Outputs>\n    <InitialUnknowns>\n";
-    for (std::size_t k : outputs) x << "      <Unknown index=\"" << k << "\"/>\n";
+    // At initialisation an output may depend on start inputs: the table says
+    // which (dependencies="" for none, so masters see no initialisation loop).
+    for (std::size_t k : outputs)
+        x << "      <Unknown index=\"" << k << "\" dependencies=\"" << initial_dependencies(info, info.variables[k - 1])
+          << "\"/>\n";
     x << "    </InitialUnknowns>\n  </ModelStructure>\n</fmiModelDescription>\n";
     return x.str();
 }
@@ -192,7 +213,14 @@ std::string documentation_html(const ModelInfo& info) {
     h << "</table>\n<h2>Errors</h2><p>Non-finite inputs, parameters outside their range, a torsion beyond the"
       << " atan law's asymptote and calls out of the FMI state machine return <code>fmi2Error</code> with a"
       << " message through the logger naming the variable and value; recoverable filter problems return"
-      << " <code>fmi2Warning</code>.</p>\n</body></html>\n";
+      << " <code>fmi2Warning</code>.</p>\n<h2>Step size</h2><p>A <code>doStep</code> may run at most "
+      << hdjoint::SampleClock::kMaxSamplesPerStep << " samples of a sampled model (estimator, controller) or "
+      << number(hdjoint::JointPlant::kMaxSubstepsPerAdvance) << " integration substeps of the joint; a longer"
+      << " step is refused whole with <code>fmi2Error</code> (split it into shorter ones).</p>\n"
+      << "<h2>FMU state</h2><p>Serialised states carry this FMU's own magic number and state version; a state"
+      << " of another FMU or version, a field that is not finite or outside its range, and a state-machine value"
+      << " that the model cannot be in are refused with <code>fmi2Error</code> naming the field.</p>\n"
+      << "</body></html>\n";
     return h.str();
 }
 

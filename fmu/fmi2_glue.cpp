@@ -37,6 +37,10 @@ enum State : unsigned {
 constexpr unsigned kAnyButFatal = kInstantiated | kInitializationMode | kStepComplete | kStepFailed | kTerminated | kError;
 constexpr unsigned kCanGet = kInitializationMode | kStepComplete | kStepFailed | kTerminated | kError;
 constexpr unsigned kCanSet = kInstantiated | kInitializationMode | kStepComplete;
+// fmi2Get*Status: after a step, not in the error state (FMI 2.0, table in 4.2.4).
+constexpr unsigned kCanGetStatus = kStepComplete | kStepFailed | kTerminated;
+// States that need an initialised model (doStep, outputs from a run).
+constexpr unsigned kNeedsModel = kStepComplete | kStepFailed | kTerminated;
 
 const char* state_name(unsigned s) {
     switch (s) {
@@ -122,12 +126,67 @@ std::string format_value(double v) {
     return buf;
 }
 
-fmi2Status no_such_variables(Instance* instance, const char* function, size_t nvr, const char* type) {
+// The Integer, Boolean and String calls: legal in `states`, but this FMU has no such variables.
+fmi2Status no_such_variables(fmi2Component c, const char* function, unsigned states, size_t nvr, const char* type) {
+    auto* in = static_cast<Instance*>(c);
+    if (!allowed(in, function, states)) return fmi2Error;
     if (nvr == 0) return fmi2OK;
-    return instance->error(std::string(function) + ": this FMU has no " + type + " variables");
+    return in->error(std::string(function) + ": this FMU has no " + type + " variables");
 }
 
-constexpr double kSerializedMagic = 20181107.0;  // marks an hdjoint FMU state
+// Serialised layout: magic, version, state, time, start, stop, stop-defined,
+// count, then the model's fields (Model::save). The magic and the version
+// are this FMU's (ModelInfo): another hdjoint FMU's state is refused.
+constexpr std::size_t kHeader = 8;
+
+bool is_state(double s) {
+    for (unsigned k : {kInstantiated, kInitializationMode, kStepComplete, kStepFailed, kTerminated, kError})
+        if (s == static_cast<double>(k)) return true;
+    return false;
+}
+
+// What is wrong with a saved state (glue fields and the model's), or "".
+// The model is checked by loading it into a scratch instance.
+std::string state_problem(const SavedState& s) {
+    if (!std::isfinite(s.time) || !std::isfinite(s.start_time) || s.time < s.start_time)
+        return "time " + format_value(s.time) + " with start time " + format_value(s.start_time) +
+               " is not a finite time at or after the start";
+    if (s.stop_time_defined && !(std::isfinite(s.stop_time) && s.stop_time >= s.start_time))
+        return "stop time " + format_value(s.stop_time) + " is not a finite time at or after the start";
+    auto scratch = info().create();
+    const Result loaded = scratch->load(s.model);
+    if (loaded.status == Status::Error) return loaded.message;
+    if ((s.state & kNeedsModel) && !scratch->initialized())
+        return std::string("state '") + state_name(s.state) + "' needs an initialised model, but the model was never "
+               "initialised";
+    return "";
+}
+
+// A call that only moves the state machine, from one of `from` to `to`.
+fmi2Status transition(fmi2Component c, const char* function, unsigned from, State to) {
+    auto* in = static_cast<Instance*>(c);
+    if (!allowed(in, function, from)) return fmi2Error;
+    in->state = to;
+    return fmi2OK;
+}
+
+// An fmi2Get*Status call: after a step (not in the error state), the one
+// kind this type reports (`known`, with `answer(instance)`), fmi2Discard for
+// any other: doStep is synchronous, so nothing is ever pending.
+template <class T>
+fmi2Status report_status(fmi2Component c, const char* function, fmi2StatusKind, T*) {
+    auto* in = static_cast<Instance*>(c);
+    return allowed(in, function, kCanGetStatus) ? fmi2Discard : fmi2Error;
+}
+template <class T, class Answer>
+fmi2Status report_status(fmi2Component c, const char* function, fmi2StatusKind asked, T* value,
+                         fmi2StatusKind known, Answer answer) {
+    auto* in = static_cast<Instance*>(c);
+    if (!allowed(in, function, kCanGetStatus)) return fmi2Error;
+    if (asked != known || !value) return fmi2Discard;
+    *value = answer(*in);
+    return fmi2OK;
+}
 
 }  // namespace
 
@@ -196,10 +255,7 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean /*toleranceDefined*/
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
-    auto* in = static_cast<Instance*>(c);
-    if (!allowed(in, "fmi2EnterInitializationMode", kInstantiated)) return fmi2Error;
-    in->state = kInitializationMode;
-    return fmi2OK;
+    return transition(c, "fmi2EnterInitializationMode", kInstantiated, kInitializationMode);
 }
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
@@ -212,11 +268,9 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     });
 }
 
+// Not in the error state (FMI 2.0, 4.2.4): only after a step.
 fmi2Status fmi2Terminate(fmi2Component c) {
-    auto* in = static_cast<Instance*>(c);
-    if (!allowed(in, "fmi2Terminate", kStepComplete | kStepFailed | kError)) return fmi2Error;
-    in->state = kTerminated;
-    return fmi2OK;
+    return transition(c, "fmi2Terminate", kStepComplete | kStepFailed, kTerminated);
 }
 
 fmi2Status fmi2Reset(fmi2Component c) {
@@ -271,34 +325,22 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
 }
 
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference[], size_t nvr, fmi2Integer[]) {
-    auto* in = static_cast<Instance*>(c);
-    if (!allowed(in, "fmi2GetInteger", kCanGet)) return fmi2Error;
-    return no_such_variables(in, "fmi2GetInteger", nvr, "Integer");
+    return no_such_variables(c, "fmi2GetInteger", kCanGet, nvr, "Integer");
 }
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference[], size_t nvr, fmi2Boolean[]) {
-    auto* in = static_cast<Instance*>(c);
-    if (!allowed(in, "fmi2GetBoolean", kCanGet)) return fmi2Error;
-    return no_such_variables(in, "fmi2GetBoolean", nvr, "Boolean");
+    return no_such_variables(c, "fmi2GetBoolean", kCanGet, nvr, "Boolean");
 }
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference[], size_t nvr, fmi2String[]) {
-    auto* in = static_cast<Instance*>(c);
-    if (!allowed(in, "fmi2GetString", kCanGet)) return fmi2Error;
-    return no_such_variables(in, "fmi2GetString", nvr, "String");
+    return no_such_variables(c, "fmi2GetString", kCanGet, nvr, "String");
 }
 fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference[], size_t nvr, const fmi2Integer[]) {
-    auto* in = static_cast<Instance*>(c);
-    if (!allowed(in, "fmi2SetInteger", kCanSet)) return fmi2Error;
-    return no_such_variables(in, "fmi2SetInteger", nvr, "Integer");
+    return no_such_variables(c, "fmi2SetInteger", kCanSet, nvr, "Integer");
 }
 fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference[], size_t nvr, const fmi2Boolean[]) {
-    auto* in = static_cast<Instance*>(c);
-    if (!allowed(in, "fmi2SetBoolean", kCanSet)) return fmi2Error;
-    return no_such_variables(in, "fmi2SetBoolean", nvr, "Boolean");
+    return no_such_variables(c, "fmi2SetBoolean", kCanSet, nvr, "Boolean");
 }
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference[], size_t nvr, const fmi2String[]) {
-    auto* in = static_cast<Instance*>(c);
-    if (!allowed(in, "fmi2SetString", kCanSet)) return fmi2Error;
-    return no_such_variables(in, "fmi2SetString", nvr, "String");
+    return no_such_variables(c, "fmi2SetString", kCanSet, nvr, "String");
 }
 
 // ---- FMU state ------------------------------------------------------------
@@ -322,7 +364,11 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
     if (!FMUstate) return in->error("fmi2SetFMUstate: FMUstate is null");
     return guarded(in, "fmi2SetFMUstate", [&] {
         const auto* saved = static_cast<const SavedState*>(FMUstate);
-        if (!in->model->load(saved->model)) return in->error("fmi2SetFMUstate: the state does not fit this model");
+        const std::string problem = state_problem(*saved);
+        if (!problem.empty()) return in->error("fmi2SetFMUstate: the state does not fit this model: " + problem);
+        const Result loaded = in->model->load(saved->model);
+        if (loaded.status == Status::Error)
+            return in->error("fmi2SetFMUstate: the state does not fit this model: " + loaded.message);
         in->state = saved->state;
         in->time = saved->time;
         in->start_time = saved->start_time;
@@ -342,10 +388,10 @@ fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* FMUstate) {
     return fmi2OK;
 }
 
-// Serialised layout: magic, state, time, start, stop, stop-defined, count, model values.
 static std::vector<double> flatten(const SavedState& s) {
-    std::vector<double> v = {kSerializedMagic, static_cast<double>(s.state), s.time, s.start_time, s.stop_time,
-                             s.stop_time_defined ? 1.0 : 0.0, static_cast<double>(s.model.size())};
+    std::vector<double> v = {info().state_magic, info().state_version, static_cast<double>(s.state), s.time,
+                             s.start_time, s.stop_time, s.stop_time_defined ? 1.0 : 0.0,
+                             static_cast<double>(s.model.size())};
     v.insert(v.end(), s.model.begin(), s.model.end());
     return v;
 }
@@ -377,18 +423,29 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     if (!serializedState || !FMUstate) return in->error("fmi2DeSerializeFMUstate: null argument");
     return guarded(in, "fmi2DeSerializeFMUstate", [&] {
         const size_t n = size / sizeof(double);
-        if (size % sizeof(double) != 0 || n < 7) return in->error("fmi2DeSerializeFMUstate: truncated state");
+        if (size % sizeof(double) != 0 || n < kHeader) return in->error("fmi2DeSerializeFMUstate: truncated state");
         std::vector<double> v(n);
         std::memcpy(v.data(), serializedState, size);
-        if (v[0] != kSerializedMagic || v[6] != static_cast<double>(n - 7))
-            return in->error("fmi2DeSerializeFMUstate: not a state of this FMU");
+        if (v[0] != info().state_magic)
+            return in->error("fmi2DeSerializeFMUstate: not a state of this FMU (" + info().model_identifier + ")");
+        if (v[1] != info().state_version)
+            return in->error("fmi2DeSerializeFMUstate: state version " + format_value(v[1]) + " is not this " +
+                             "binary's version " + format_value(info().state_version));
+        if (v[7] != static_cast<double>(n - kHeader))
+            return in->error("fmi2DeSerializeFMUstate: truncated state (its header counts " + format_value(v[7]) +
+                             " model values, " + std::to_string(n - kHeader) + " follow)");
+        if (!is_state(v[2]) || (v[6] != 0.0 && v[6] != 1.0))
+            return in->error("fmi2DeSerializeFMUstate: state-machine value " + format_value(v[2]) +
+                             " or stop-time flag " + format_value(v[6]) + " is not valid");
         auto saved = std::make_unique<SavedState>();
-        saved->state = static_cast<unsigned>(v[1]);
-        saved->time = v[2];
-        saved->start_time = v[3];
-        saved->stop_time = v[4];
-        saved->stop_time_defined = v[5] != 0.0;
-        saved->model.assign(v.begin() + 7, v.end());
+        saved->state = static_cast<unsigned>(v[2]);
+        saved->time = v[3];
+        saved->start_time = v[4];
+        saved->stop_time = v[5];
+        saved->stop_time_defined = v[6] != 0.0;
+        saved->model.assign(v.begin() + kHeader, v.end());
+        const std::string problem = state_problem(*saved);
+        if (!problem.empty()) return in->error("fmi2DeSerializeFMUstate: the state does not fit this model: " + problem);
         delete static_cast<SavedState*>(*FMUstate);
         *FMUstate = saved.release();
         return fmi2OK;
@@ -428,11 +485,12 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
                          " is not a forward step");
     // Masters accumulate communication points in floating point; accept
     // round-off (and re-synchronise to the master's time) but not a jump.
-    const double tolerance = 1e-9 * std::max(1.0, std::fabs(t)) + 1e-6 * h;
+    // Relative to the time only: a long step must not widen it.
+    const double tolerance = 1e-9 * std::max(1.0, std::fabs(t));
     if (std::fabs(t - in->time) > tolerance)
         return in->error("fmi2DoStep: expected communication point " + format_value(in->time) + " but got " +
                          format_value(t));
-    if (in->stop_time_defined && t + h > in->stop_time + 1e-9 * std::max(1.0, std::fabs(in->stop_time)) + 1e-3 * h)
+    if (in->stop_time_defined && t + h > in->stop_time + 1e-9 * std::max(1.0, std::fabs(in->stop_time)))
         return in->error("fmi2DoStep: the step to " + format_value(t + h) + " goes past stopTime " +
                          format_value(in->stop_time));
     return guarded(in, "fmi2DoStep", [&] {
@@ -448,38 +506,22 @@ fmi2Status fmi2CancelStep(fmi2Component c) {
     return in->error("fmi2CancelStep: doStep never runs asynchronously, there is nothing to cancel");
 }
 
-fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind, fmi2Status*) {
-    auto* in = static_cast<Instance*>(c);
-    if (!allowed(in, "fmi2GetStatus", kCanGet)) return fmi2Error;
-    return fmi2Discard;  // doStep is synchronous: there is no pending status
+fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status* value) {
+    return report_status(c, "fmi2GetStatus", s, value);
 }
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real* value) {
-    auto* in = static_cast<Instance*>(c);
-    if (!allowed(in, "fmi2GetRealStatus", kCanGet)) return fmi2Error;
-    if (s == fmi2LastSuccessfulTime && value) {
-        *value = in->time;
-        return fmi2OK;
-    }
-    return fmi2Discard;
+    return report_status(c, "fmi2GetRealStatus", s, value, fmi2LastSuccessfulTime,
+                         [](const Instance& in) { return fmi2Real{in.time}; });
 }
-fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind, fmi2Integer*) {
-    auto* in = static_cast<Instance*>(c);
-    if (!allowed(in, "fmi2GetIntegerStatus", kCanGet)) return fmi2Error;
-    return fmi2Discard;
+fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer* value) {
+    return report_status(c, "fmi2GetIntegerStatus", s, value);
 }
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean* value) {
-    auto* in = static_cast<Instance*>(c);
-    if (!allowed(in, "fmi2GetBooleanStatus", kCanGet)) return fmi2Error;
-    if (s == fmi2Terminated && value) {
-        *value = fmi2False;
-        return fmi2OK;
-    }
-    return fmi2Discard;
+    return report_status(c, "fmi2GetBooleanStatus", s, value, fmi2Terminated,
+                         [](const Instance&) { return fmi2Boolean{fmi2False}; });
 }
-fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind, fmi2String*) {
-    auto* in = static_cast<Instance*>(c);
-    if (!allowed(in, "fmi2GetStringStatus", kCanGet)) return fmi2Error;
-    return fmi2Discard;
+fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String* value) {
+    return report_status(c, "fmi2GetStringStatus", s, value);
 }
 
 }  // extern "C"

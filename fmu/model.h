@@ -18,6 +18,8 @@ struct Variable {
     std::string description;
     double start;  // parameters and inputs; outputs are calculated
     double min = -1e300, max = 1e300;
+    // Outputs: the inputs (space-separated names) the value at initialisation depends on.
+    std::string initial_dependencies;
 };
 
 enum class Status { Ok, Warning, Error };
@@ -43,14 +45,21 @@ public:
     virtual Result do_step(double t, double h) = 0;
     // Back to the state after instantiation (default parameters, no history).
     virtual void reset() = 0;
-    // Everything the instance holds, as doubles (for FMU state get/set/serialise).
+    // True once initialize() has built the model (doStep needs it).
+    virtual bool initialized() const = 0;
+    // Everything the instance holds, as doubles (for FMU state get/set/serialise);
+    // load() checks every value and leaves the model as it was when one is wrong.
     virtual std::vector<double> save() const = 0;
-    virtual bool load(const std::vector<double>& data) = 0;
+    virtual Result load(const std::vector<double>& data) = 0;
 };
 
 struct ModelInfo {
     std::string model_name;
     std::string model_identifier;
+    // Marks this FMU's serialised states (each hdjoint FMU has its own) and
+    // their layout: raise state_version whenever the saved fields change.
+    double state_magic;
+    double state_version;
     std::string description;
     std::vector<Variable> variables;
     std::unique_ptr<Model> (*create)();
@@ -60,8 +69,6 @@ struct ModelInfo {
 // modelDescription generator both take the model from here.
 const ModelInfo& this_model();
 
-// Shared helpers for building a variable table.
-std::vector<Variable> parameter_variables(bool estimator, bool plant);
 const Variable* find_variable(const ModelInfo& info, unsigned vr);
 
 }  // namespace hdjoint::fmu

@@ -1,23 +1,47 @@
 #pragma once
-// Parameters by FMI value reference (the index in parameter_table.def), and
-// their flat copy for FMU state; shared by every hdjoint FMU.
-#include <vector>
+// Parameters by FMI value reference (the index in their table), for both
+// parameter tables: the joint's Parameters (parameter_table.def) and the
+// controller's ControllerParameters (controller_table.def).
+#include <cstddef>
 
+#include "hdjoint/joint_controller.h"
 #include "hdjoint/parameters.h"
 
 namespace hdjoint::fmu {
 
-inline bool is_parameter(unsigned vr) { return vr < parameter_count(); }
-inline double& parameter_ref(Parameters& p, unsigned vr) { return p.*(parameter_table()[vr].member); }
-inline double parameter_value(const Parameters& p, unsigned vr) { return p.*(parameter_table()[vr].member); }
+template <class Params>
+struct ParameterRows;
+template <>
+struct ParameterRows<Parameters> {
+    static const ParameterInfo* table() { return parameter_table(); }
+    static std::size_t count() { return parameter_count(); }
+};
+template <>
+struct ParameterRows<ControllerParameters> {
+    static const ControllerParameterInfo* table() { return controller_parameter_table(); }
+    static std::size_t count() { return controller_parameter_count(); }
+};
 
-inline void append_parameters(const Parameters& p, std::vector<double>* out) {
-    for (unsigned i = 0; i < parameter_count(); ++i) out->push_back(parameter_value(p, i));
+template <class Params>
+bool is_parameter(unsigned vr) {
+    return vr < ParameterRows<Params>::count();
 }
-// Reads parameter_count() values from `*cursor` on; false when too few remain.
-inline bool read_parameters(const std::vector<double>& in, std::size_t* cursor, Parameters* p) {
-    if (in.size() < *cursor + parameter_count()) return false;
-    for (unsigned i = 0; i < parameter_count(); ++i) parameter_ref(*p, i) = in[(*cursor)++];
+template <class Params>
+double& parameter_ref(Params& p, unsigned vr) {
+    return p.*(ParameterRows<Params>::table()[vr].member);
+}
+template <class Params>
+double parameter_value(const Params& p, unsigned vr) {
+    return p.*(ParameterRows<Params>::table()[vr].member);
+}
+
+// Every parameter as a named state field, read back within its valid range.
+template <class Archive, class Params>
+bool parameter_fields(Archive& a, Params& p) {
+    for (std::size_t i = 0; i < ParameterRows<Params>::count(); ++i) {
+        const auto& row = ParameterRows<Params>::table()[i];
+        if (!a(row.name, p.*(row.member), row.min, row.max)) return false;
+    }
     return true;
 }
 

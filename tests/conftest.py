@@ -24,15 +24,17 @@ from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFr
 import hdjoint  # noqa: E402
 from hdjoint import parameters  # noqa: E402
 from hdjoint.fmus import fmu_path  # noqa: E402
+# Each FMU's inputs and outputs, from its C++ signal table (not retyped here).
+from hdjoint.fmu_runner import (CONTROLLER_INPUTS, CONTROLLER_OUTPUTS, ESTIMATOR_INPUTS,  # noqa: E402,F401
+                                ESTIMATOR_OUTPUTS, JOINT_INPUTS, JOINT_OUTPUTS)
 
 ESTIMATOR = "JointTorqueEstimator"
 JOINT = "HarmonicDriveJoint"
+CONTROLLER = "JointController"
 FMU_NAMES = (ESTIMATOR, JOINT)
-
-ESTIMATOR_INPUTS = ("i_m", "theta_m", "theta_l")
-ESTIMATOR_OUTPUTS = ("tau_ukf", "tau_compliance", "omega_m", "dtheta_f", "tau_ukf_std", "tau_hat", "tau_hat_std")
-JOINT_INPUTS = ("i_m", "tau_ext")
-JOINT_OUTPUTS = ("theta_m", "theta_l", "tau_joint", "omega_m", "omega_link")
+ALL_FMUS = (ESTIMATOR, JOINT, CONTROLLER)
+FMU_IO = {ESTIMATOR: (ESTIMATOR_INPUTS, ESTIMATOR_OUTPUTS), JOINT: (JOINT_INPUTS, JOINT_OUTPUTS),
+          CONTROLLER: (CONTROLLER_INPUTS, CONTROLLER_OUTPUTS)}
 
 _STATUS = ("OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING")
 
@@ -71,7 +73,7 @@ def joint_fmu() -> Path:
 def unzipped(tmp_path_factory):
     """Each FMU extracted once per session: {model identifier: directory}."""
     root = tmp_path_factory.mktemp("fmus")
-    return {name: Path(fmpy.extract(str(fmu_path(name)), str(root / name))) for name in FMU_NAMES}
+    return {name: Path(fmpy.extract(str(fmu_path(name)), str(root / name))) for name in ALL_FMUS}
 
 
 # fmpy's logger proxy (which formats the FMU's printf-style message) keeps ONE

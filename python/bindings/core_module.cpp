@@ -16,7 +16,9 @@
 #include <vector>
 
 #include "hdjoint/compliance_model.h"
+#include "hdjoint/friction.h"
 #include "hdjoint/hysteresis.h"
+#include "hdjoint/joint_controller.h"
 #include "hdjoint/joint_plant.h"
 #include "hdjoint/joint_state_filter.h"
 #include "hdjoint/parameters.h"
@@ -65,6 +67,13 @@ void check_lengths(std::size_t n, std::initializer_list<std::size_t> sizes) {
     if (n < 1) throw std::invalid_argument("input arrays are empty");
 }
 
+template <class In, class Out>
+std::size_t signal_index(const SignalTable<In, Out>& table, const std::string& name) {
+    for (std::size_t c = 0; c < table.size(); ++c)
+        if (name == table[c].name) return c;
+    throw std::logic_error("no signal " + name);
+}
+
 // The estimator over a recording, with the FMU's timing: row j is a
 // communication point; its step [t_j, t_j+1) runs the samples start + k*Ts
 // inside it on row j's inputs, and row j's outputs are those after the step
@@ -77,61 +86,40 @@ std::map<std::string, OutArray> run_estimator(const std::map<std::string, double
     const std::size_t n = time.shape(0);
     check_lengths(n, {i_m.shape(0), theta_m.shape(0), theta_l.shape(0)});
     const Parameters p = parameters_from(values, true, false);
-    TorqueEstimator estimator(p);
-    std::vector<double> tau_ukf(n), tau_c(n), omega(n), dtheta_f(n), std_ukf(n), nis(n), status(n), z(n);
-    std::vector<double> tau_hat(n), std_hat(n), load(n);
+    TorqueEstimator estimator(p, time(0));
+    const auto& signals = estimator_signals();
+    // One column per output and internal signal of estimator_signals.def.
+    std::vector<std::vector<double>> columns(signals.size(), std::vector<double>(n));
+    std::vector<double> status(n);
     std::vector<JointFilterRecord> records;
     std::vector<long> last_record(n, -1);  // per row: index of the last filter sample its step ran
     if (smooth) records.reserve(n);
-    const double t0 = time(0), tolerance = 1e-6 * p.Ts;
-    long next = 0;
     {
         nb::gil_scoped_release release;
         for (std::size_t j = 0; j < n; ++j) {
             const double end = j + 1 < n ? time(j + 1) : time(j) + p.Ts;
-            const EstimatorInputs in{i_m(j), theta_m(j), theta_l(j)};
-            int worst = 0;
-            while (t0 + static_cast<double>(next) * p.Ts < end - tolerance) {
-                std::string message;
-                const EstimatorStatus s = estimator.step(in, &message);
-                if (!recoverable(s)) {
-                    nb::gil_scoped_acquire acquire;
-                    throw std::runtime_error("row " + std::to_string(j) + " (time " + std::to_string(time(j)) +
-                                             " s): " + message);
-                }
-                worst = std::max(worst, static_cast<int>(s));
-                ++next;
+            std::string message;
+            const EstimatorStatus s = estimator.advance_to(end, {i_m(j), theta_m(j), theta_l(j)}, &message, [&] {
                 if (smooth && estimator.joint_filter().started() &&
-                    (records.empty() || estimator.joint_filter().record().predicted)) {
+                    (records.empty() || estimator.joint_filter().record().predicted))
                     records.push_back(estimator.joint_filter().record());
-                }
+            });
+            if (!recoverable(s)) {
+                nb::gil_scoped_acquire acquire;
+                throw std::runtime_error("row " + std::to_string(j) + " (time " + std::to_string(time(j)) +
+                                         " s): " + message);
             }
             last_record[j] = static_cast<long>(records.size()) - 1;
-            const EstimatorOutputs& o = estimator.outputs();
-            tau_ukf[j] = o.tau_ukf;
-            tau_c[j] = o.tau_compliance;
-            omega[j] = o.omega_m;
-            dtheta_f[j] = o.dtheta_f;
-            std_ukf[j] = o.tau_ukf_std;
-            nis[j] = o.nis;
-            z[j] = o.hysteresis_torque;
-            tau_hat[j] = o.tau_hat;
-            std_hat[j] = o.tau_hat_std;
-            load[j] = o.load;
-            status[j] = worst;
+            for (std::size_t c = 0; c < signals.size(); ++c)
+                if (signals[c].kind != SignalKind::Input) columns[c][j] = estimator.outputs().*(signals[c].output);
+            status[j] = static_cast<double>(s);
         }
     }
     std::map<std::string, OutArray> out;
-    out.emplace("tau_ukf", make_array(std::move(tau_ukf)));
-    out.emplace("tau_compliance", make_array(std::move(tau_c)));
-    out.emplace("omega_m", make_array(std::move(omega)));
-    out.emplace("dtheta_f", make_array(std::move(dtheta_f)));
-    out.emplace("tau_ukf_std", make_array(std::move(std_ukf)));
-    out.emplace("nis", make_array(std::move(nis)));
-    out.emplace("status", make_array(std::move(status)));
-    out.emplace("hysteresis_torque", make_array(std::move(z)));
     if (smooth) {
         const SmoothedTorque sm = smooth_joint_states(records, p);
+        const std::vector<double>& tau_hat = columns[signal_index(signals, "tau_hat")];
+        const std::vector<double>& std_hat = columns[signal_index(signals, "tau_hat_std")];
         std::vector<double> tau_s(n), std_s(n);
         for (std::size_t j = 0; j < n; ++j) {
             const long r = last_record[j];
@@ -141,9 +129,9 @@ std::map<std::string, OutArray> run_estimator(const std::map<std::string, double
         out.emplace("tau_smooth", make_array(std::move(tau_s)));
         out.emplace("tau_smooth_std", make_array(std::move(std_s)));
     }
-    out.emplace("tau_hat", make_array(std::move(tau_hat)));
-    out.emplace("tau_hat_std", make_array(std::move(std_hat)));
-    out.emplace("tau_load", make_array(std::move(load)));
+    for (std::size_t c = 0; c < signals.size(); ++c)
+        if (signals[c].kind != SignalKind::Input) out.emplace(signals[c].name, make_array(std::move(columns[c])));
+    out.emplace("status", make_array(std::move(status)));
     return out;
 }
 
@@ -205,7 +193,7 @@ std::map<std::string, OutArray> simulate_joint(const std::map<std::string, doubl
             theta_l[j] = o.theta_l;
             tau[j] = o.tau_joint;
             omega_m[j] = o.omega_m;
-            omega_l[j] = o.omega_l;
+            omega_l[j] = o.omega_link;
             const PlantInternals r = plant.internals();
             friction[j] = r.tau_friction;
             cogging[j] = r.tau_cogging;
@@ -269,6 +257,77 @@ double time_joint_filter(const std::map<std::string, double>& values, long n) {
     });
 }
 
+// ---- the laws the diagnosis evaluates on recordings: the FMUs' own code ----
+
+// Motor friction of eq. (2) at t seconds into a run: friction.h's law with
+// the drift hypothesis friction_drift_scale (held at >= 0).
+OutArray motor_friction_law(const std::map<std::string, double>& values, Array omega_m, Array t) {
+    const std::size_t n = omega_m.shape(0);
+    check_lengths(n, {t.shape(0)});
+    const Parameters p = parameters_from(values, true, true);
+    std::vector<double> f(n);
+    for (std::size_t j = 0; j < n; ++j) f[j] = motor_friction(omega_m(j), p, friction_drift_scale(t(j), p));
+    return make_array(std::move(f));
+}
+
+// Cogging torque on the motor (0 when off).
+OutArray cogging_law(const std::map<std::string, double>& values, Array theta_m) {
+    const std::size_t n = theta_m.shape(0);
+    check_lengths(n, {});
+    const Parameters p = parameters_from(values, true, true);
+    std::vector<double> c(n, 0.0);
+    if (cogging_on(p))
+        for (std::size_t j = 0; j < n; ++j) c[j] = cogging_torque(theta_m(j), p);
+    return make_array(std::move(c));
+}
+
+// The torque the link's own dynamics need (the joint's link equation with no
+// external torque, solved for the transmitted torque).
+OutArray link_torque_law(const std::map<std::string, double>& values, Array theta_l, Array omega_l, Array alpha_l) {
+    const std::size_t n = theta_l.shape(0);
+    check_lengths(n, {omega_l.shape(0), alpha_l.shape(0)});
+    const Parameters p = parameters_from(values, false, true);
+    std::vector<double> tau(n);
+    for (std::size_t j = 0; j < n; ++j) tau[j] = link_torque_needed(theta_l(j), omega_l(j), alpha_l(j), p);
+    return make_array(std::move(tau));
+}
+
+ControllerParameters controller_parameters_from(const std::map<std::string, double>& values) {
+    ControllerParameters p;
+    for (const auto& [name, value] : values) {
+        const ControllerParameterInfo* row = nullptr;
+        for (std::size_t i = 0; i < controller_parameter_count() && !row; ++i)
+            if (name == controller_parameter_table()[i].name) row = &controller_parameter_table()[i];
+        if (!row) throw std::invalid_argument("unknown controller parameter '" + name + "'");
+        p.*(row->member) = value;
+    }
+    if (auto problem = validate(p)) throw std::invalid_argument(*problem);
+    return p;
+}
+
+// Each FMU's inputs, outputs and (batch-only) internal signals, from its signal table.
+template <class In, class Out>
+nb::list signal_rows(const SignalTable<In, Out>& table) {
+    nb::list rows;
+    for (const Signal<In, Out>& s : table) {
+        nb::dict row;
+        row["name"] = s.name;
+        row["kind"] = s.kind == SignalKind::Input ? "input" : s.kind == SignalKind::Output ? "output" : "internal";
+        row["unit"] = s.unit;
+        row["description"] = s.description;
+        rows.append(row);
+    }
+    return rows;
+}
+
+nb::dict fmu_signals() {
+    nb::dict d;
+    d["JointTorqueEstimator"] = signal_rows(estimator_signals());
+    d["HarmonicDriveJoint"] = signal_rows(plant_signals());
+    d["JointController"] = signal_rows(controller_signals());
+    return d;
+}
+
 nb::list table() {
     nb::list rows;
     for (std::size_t i = 0; i < parameter_count(); ++i) {
@@ -293,6 +352,34 @@ NB_MODULE(_core, m) {
     m.doc() = "hdjoint C++ core: the batch path (same code as the FMUs)";
     // The batch status column's value for a sample the joint-state filter rejected as an outlier.
     m.attr("STATUS_SAMPLE_REJECTED") = static_cast<int>(EstimatorStatus::SampleRejected);
+    m.def("fmu_signals", &fmu_signals,
+          "Each FMU's inputs, outputs and batch-only signals (name, kind, unit, description), in value-reference "
+          "order: the tables of src/hdjoint/*_signals.def.");
+    m.def("motor_friction", &motor_friction_law, nb::arg("params"), nb::arg("omega_m"), nb::arg("t"),
+          "Motor friction of eq. (2) (Coulomb, Stribeck, viscous; the drift scale max(0, 1 + Fc_drift*t)) at each "
+          "speed and time since the start: the FMUs' code.");
+    m.def("cogging_torque", &cogging_law, nb::arg("params"), nb::arg("theta_m"),
+          "Cogging torque on the motor at each motor angle (0 when off).");
+    m.def("link_torque", &link_torque_law, nb::arg("params"), nb::arg("theta_l"), nb::arg("omega_l"),
+          nb::arg("alpha_l"),
+          "The transmitted torque the link's equation of motion needs (no external torque): "
+          "Jl*alpha_l + Bl*omega_l + mgl*sin(theta_l) + link friction.");
+    nb::class_<JointController>(m, "JointController",
+                                "The C++ joint controller (JointController.fmu's law), one sample at a time.")
+        .def("__init__",
+             [](JointController* self, const std::map<std::string, double>& values, double start_time) {
+                 new (self) JointController(controller_parameters_from(values), start_time);
+             },
+             nb::arg("params"), nb::arg("start_time") = 0.0)
+        .def("command",
+             [](JointController& c, double theta_m, double theta_ref, double omega_ref, double tau_fb) {
+                 ControllerInputs in;
+                 in.theta_m = theta_m;
+                 in.tau_fb = tau_fb;
+                 return c.command(in, theta_ref, omega_ref);
+             },
+             nb::arg("theta_m"), nb::arg("theta_ref"), nb::arg("omega_ref"), nb::arg("tau_fb") = 0.0,
+             "The control law at one sample on an outside reference: the saturated current command.");
     m.def("parameter_table", &table, "The parameter table (name, unit, default, range, scope, description).");
     m.def("check_parameters", &check_parameters, nb::arg("params"),
           "validate() on a whole parameter set: the first problem (naming the parameter), or None.");

@@ -3,9 +3,9 @@
   tau_T  transmission: the encoders through eq. (3)-(8) (the C++ compliance
          model, with every beyond-paper term the parameter set switches on)
   tau_M  motor: the current through eq. (2), N*(Kt*i + cogging - Jm*alpha_m
-         - friction(omega_m, t))
+         - friction(omega_m, t)), friction and cogging by the C++ laws
   tau_L  link: the link's motion, Jl*alpha_l + Bl*omega_l + mgl*sin(theta_l)
-         + link friction (no external torque assumed)
+         + link friction (no external torque assumed), the C++ link equation
   tau_S  the torque sensor, when the recording has one
 
 The differences between them are the residual channels the diagnosis
@@ -52,7 +52,7 @@ class Prepared:
         return self._smoothed[name]
 
 # The motor and link estimates use differentiated encoders, so they see the
-# world through the Savitzky-Golay filter: their current is smoothed the
+# world through the kinematics' Gaussian smoothing filter: their current is smoothed the
 # same way, and whatever they are compared with must be too (SMOOTHED_PARTS).
 SMOOTHED_PARTS = ("motor", "link")
 
@@ -77,11 +77,16 @@ def tau_transmission(prep: Prepared, p: dict[str, float], index: np.ndarray | No
                            rec.i_m, rec.theta_m, rec.theta_l)
 
 
+def _native(p: dict[str, float]) -> dict[str, float]:
+    """The parameters a C++ law takes (the names of the parameter table)."""
+    return {k: float(v) for k, v in p.items() if k in parameters.table()}
+
+
 def motor_friction(p: dict, omega: np.ndarray, t_rel: np.ndarray) -> np.ndarray:
-    """Motor friction of eq. (2) with the Stribeck and drift terms (as in src/hdjoint/friction.h)."""
-    scale = 1.0 + _get(p, "Fc_drift") * t_rel
-    level = _get(p, "Fc") + _get(p, "Fs") * np.exp(-(omega / _get(p, "omega_s")) ** 2)
-    return scale * level * np.tanh(omega / _get(p, "omega_fc")) + _get(p, "Bm") * omega
+    """Motor friction of eq. (2) with the Stribeck and drift terms: the C++ law
+    the FMUs run (friction.h, drift scale max(0, 1 + Fc_drift*t))."""
+    omega, t_rel = np.broadcast_arrays(np.asarray(omega, float), np.asarray(t_rel, float))
+    return _core.motor_friction(_native(p), np.ascontiguousarray(omega), np.ascontiguousarray(t_rel))
 
 
 def delayed_current(prep: Prepared, delay: float) -> np.ndarray:
@@ -107,21 +112,18 @@ def tau_motor(prep: Prepared, p: dict[str, float], index: np.ndarray | None = No
     i = pick(_smoothed_current(prep, _get(p, "i_delay")))
     omega = pick(kin.omega_m)
     drive = p["Kt"] * i - p["Jm"] * pick(kin.alpha_m) - motor_friction(p, omega, pick(prep.t_rel))
-    a, b = _get(p, "cog_a"), _get(p, "cog_b")
-    if a or b:  # ripple at the motor angle's orders: through the same filter as the current
-        order = _get(p, "cog_order")
-        drive = drive + pick(kin.smooth(a * np.cos(order * rec.theta_m) + b * np.sin(order * rec.theta_m)))
+    if _get(p, "cog_a") or _get(p, "cog_b"):  # ripple at the motor angle's orders: through the same filter as the current
+        drive = drive + pick(kin.smooth(_core.cogging_torque(_native(p), np.ascontiguousarray(rec.theta_m, float))))
     return p["N"] * drive
 
 
 def tau_link(prep: Prepared, p: dict[str, float], index: np.ndarray | None = None) -> np.ndarray:
     """tau_L: the torque the link's own dynamics need (no external torque; at `index` only, if given)."""
     rec, kin = prep.rec, prep.kin
-    pick = (lambda x: x) if index is None else (lambda x: x[index])
-    omega = pick(kin.omega_l)
-    friction = _get(p, "Fl") * np.tanh(omega * p["N"] / _get(p, "omega_fc"))
-    return (_get(p, "Jl") * pick(kin.alpha_l) + _get(p, "Bl") * omega
-            + _get(p, "mgl") * np.sin(pick(rec.theta_l)) + friction)
+    pick = (lambda x: np.ascontiguousarray(x, float)) if index is None else (
+        lambda x: np.ascontiguousarray(x[index], float))
+    # The joint's own link equation (joint_plant.h), solved for the transmitted torque.
+    return _core.link_torque(_native(p), pick(rec.theta_l), pick(kin.omega_l), pick(kin.alpha_l))
 
 
 ESTIMATES = {"transmission": tau_transmission, "motor": tau_motor, "link": tau_link}

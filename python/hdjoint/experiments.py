@@ -15,7 +15,7 @@ from typing import Callable
 
 import numpy as np
 
-from . import parameters
+from . import _core, parameters
 from .fmu_runner import FmuInstance
 from .fmus import fmu_path
 from .recording import Recording
@@ -58,11 +58,17 @@ class Sensors:
 
 @dataclass
 class Controller:
-    """Link position PD on the motor encoder with nominal gravity feed-forward."""
+    """Link position PD on the motor encoder with nominal gravity feed-forward
+    (the C++ JointController's law, without the torque loop)."""
     kp: float = 2.0        # A per motor rad
     kd: float = 0.06       # A per motor rad/s
     speed_filter_hz: float = 150.0
     i_max: float = 4.0     # A
+
+    def native(self, sample_time: float, N: float, Kt: float, mgl: float) -> dict[str, float]:
+        """The C++ controller's parameters (controller_table.def) for these gains."""
+        return {"Ts": sample_time, "kp": self.kp, "kd": self.kd, "speed_filter": 2.0 * math.pi * self.speed_filter_hz,
+                "i_max": self.i_max, "N": N, "Kt": Kt, "mgl": mgl, "jtf": 0.0}
 
 
 @dataclass
@@ -202,20 +208,15 @@ def run(name: str = "paper", joint: dict[str, float] | None = None, nominal: dic
 
     out = np.empty((n, 3))
     i_cmd = np.empty(n)
-    alpha = 1.0 - math.exp(-2.0 * math.pi * ctl.speed_filter_hz * sample_time)
+    # The C++ controller (JointController.fmu's law) on this experiment's reference.
+    law = _core.JointController(ctl.native(sample_time, N, Kt, mgl))
     with FmuInstance(fmu_path("HarmonicDriveJoint"), "joint") as plant:
         plant.start(0.0, None, parameters.for_plant(joint), {"i_m": 0.0, "tau_ext": float(tau_ext[0])})
         stepper = plant.stepper(("i_m", "tau_ext"), ("theta_m", "theta_l", "tau_joint"))
         out[0] = plant.get(("theta_m", "theta_l", "tau_joint"))
-        theta_m0 = out[0, 0]
-        previous, speed = theta_m0, 0.0
+        theta_m0 = out[0, 0]  # the controller counts the motor angle from its start
         for j in range(n):
-            theta_m = out[j, 0]
-            speed += alpha * ((theta_m - previous) / sample_time - speed)
-            previous = theta_m
-            error = N * theta_ref[j] - (theta_m - theta_m0)
-            i = ctl.kp * error + ctl.kd * (N * omega_ref[j] - speed) + mgl * math.sin(theta_ref[j]) / (N * Kt)
-            i_cmd[j] = min(max(i, -ctl.i_max), ctl.i_max)
+            i_cmd[j] = law.command(out[j, 0] - theta_m0, theta_ref[j], omega_ref[j])
             if j + 1 < n:
                 out[j + 1] = stepper.step(t[j], sample_time, (i_cmd[j], tau_ext[j]))
 

@@ -19,9 +19,22 @@ from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, 
 from fmpy.fmi1 import FMICallException
 from fmpy import calloc, free
 
+from . import _core
 from .fmus import fmu_path
 
-ESTIMATOR_OUTPUTS = ("tau_ukf", "tau_compliance", "omega_m", "dtheta_f", "tau_ukf_std", "tau_hat", "tau_hat_std")
+
+def _signal_names(model: str, kind: str) -> tuple[str, ...]:
+    """An FMU's inputs or outputs in value-reference order, from its C++ signal table."""
+    return tuple(row["name"] for row in _core.fmu_signals()[model] if row["kind"] == kind)
+
+
+# Declared once, in src/hdjoint/*_signals.def; read here through the bindings.
+ESTIMATOR_INPUTS = _signal_names("JointTorqueEstimator", "input")
+ESTIMATOR_OUTPUTS = _signal_names("JointTorqueEstimator", "output")
+JOINT_INPUTS = _signal_names("HarmonicDriveJoint", "input")
+JOINT_OUTPUTS = _signal_names("HarmonicDriveJoint", "output")
+CONTROLLER_INPUTS = _signal_names("JointController", "input")
+CONTROLLER_OUTPUTS = _signal_names("JointController", "output")
 _STATUS = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING"]
 
 
@@ -181,7 +194,7 @@ def run_estimator_fmu(time, i_m, theta_m, theta_l, params: dict[str, float] | No
     with FmuInstance(fmu or fmu_path("JointTorqueEstimator"), "estimator") as inst:
         inst.start(float(time[0]), None, params, {"i_m": float(i_m[0]), "theta_m": float(theta_m[0]),
                                                   "theta_l": float(theta_l[0])})
-        stepper = inst.stepper(("i_m", "theta_m", "theta_l"), outputs)
+        stepper = inst.stepper(ESTIMATOR_INPUTS, outputs)
         steps = np.append(np.diff(time), ts)
         columns = np.column_stack([i_m, theta_m, theta_l]).tolist()
         for j in range(n):

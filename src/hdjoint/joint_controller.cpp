@@ -47,7 +47,10 @@ std::optional<std::string> validate(const ControllerParameters& p) {
     return std::nullopt;
 }
 
-JointController::JointController(const ControllerParameters& p, double start_time) : p_(p), start_time_(start_time) {
+HDJ_DEFINE_SIGNAL_TABLE(controller_signals, ControllerInputs, ControllerOutputs, HDJ_CONTROLLER_SIGNALS)
+
+JointController::JointController(const ControllerParameters& p, double start_time)
+    : p_(p), clock_(start_time, p.Ts) {
     double omega_ref = 0.0;
     out_.theta_ref = reference(start_time, &omega_ref);
     out_.tau_ext = disturbance(start_time);
@@ -67,16 +70,21 @@ double JointController::disturbance(double t) const {
     return d;
 }
 
-void JointController::advance(double t, double h, const ControllerInputs& in) {
-    const double tolerance = 1e-6 * p_.Ts;
-    // Samples fall on start + k*Ts (computed from k, so no round-off builds up).
-    while (start_time_ + static_cast<double>(next_sample_) * p_.Ts < t + h - tolerance) {
-        sample(start_time_ + static_cast<double>(next_sample_) * p_.Ts, in);
-        ++next_sample_;
-    }
+bool JointController::advance(double t, double h, const ControllerInputs& in, std::string* message) {
+    return clock_.run_until(t + h, [&](double t_k) {
+        sample(t_k, in);
+        return true;
+    }, message);
 }
 
 void JointController::sample(double t, const ControllerInputs& in) {
+    double omega_ref = 0.0;
+    const double theta_ref = reference(t, &omega_ref);
+    command(in, theta_ref, omega_ref);
+    out_.tau_ext = disturbance(t);
+}
+
+double JointController::command(const ControllerInputs& in, double theta_ref, double omega_ref) {
     if (has_previous_) {
         const double alpha = 1.0 - std::exp(-p_.speed_filter * p_.Ts);
         omega_hat_ += alpha * ((in.theta_m - previous_theta_m_) / p_.Ts - omega_hat_);
@@ -86,8 +94,6 @@ void JointController::sample(double t, const ControllerInputs& in) {
     previous_tau_fb_ = in.tau_fb;
     has_previous_ = true;
 
-    double omega_ref = 0.0;
-    const double theta_ref = reference(t, &omega_ref);
     const double NKt = p_.N * p_.Kt;
     const double tau_d = NKt * (p_.kp * (p_.N * theta_ref - in.theta_m) + p_.kd * (p_.N * omega_ref - omega_hat_)) +
                          p_.mgl * std::sin(theta_ref);
@@ -108,27 +114,7 @@ void JointController::sample(double t, const ControllerInputs& in) {
     out_.tau_d = tau_d;
     out_.theta_ref = theta_ref;
     out_.e_link = theta_ref - in.theta_l;
-    out_.tau_ext = disturbance(t);
-}
-
-std::vector<double> JointController::save_state() const {
-    return {start_time_, static_cast<double>(next_sample_), has_previous_ ? 1.0 : 0.0, previous_theta_m_,
-            omega_hat_, out_.i_m, out_.tau_ext, out_.theta_ref, out_.tau_d, out_.e_link,
-            previous_tau_fb_, tau_rate_, integral_};
-}
-
-bool JointController::load_state(const std::vector<double>& s) {
-    if (s.size() != 13) return false;
-    start_time_ = s[0];
-    next_sample_ = static_cast<long>(s[1]);
-    has_previous_ = s[2] != 0.0;
-    previous_theta_m_ = s[3];
-    omega_hat_ = s[4];
-    out_ = {s[5], s[6], s[7], s[8], s[9]};
-    previous_tau_fb_ = s[10];
-    tau_rate_ = s[11];
-    integral_ = s[12];
-    return true;
+    return out_.i_m;
 }
 
 }  // namespace hdjoint

@@ -19,6 +19,10 @@
 #include <string>
 #include <vector>
 
+#include "controller_signals.def"
+#include "sample_clock.h"
+#include "signal_table.h"
+
 namespace hdjoint {
 
 struct ControllerParameters {
@@ -45,18 +49,15 @@ std::size_t controller_parameter_count();
 std::optional<std::string> validate(const ControllerParameters& p);
 
 struct ControllerInputs {
-    double theta_m = 0.0;  // motor encoder, rad
-    double theta_l = 0.0;  // link encoder, rad (reported, not used by the law)
-    double tau_fb = 0.0;   // joint torque for the torque loop, N.m
+    HDJ_CONTROLLER_SIGNALS(HDJ_MEMBER, HDJ_SKIP, HDJ_SKIP)
 };
 
 struct ControllerOutputs {
-    double i_m = 0.0;          // current command, A
-    double tau_ext = 0.0;      // external load disturbance, N.m
-    double theta_ref = 0.0;    // link reference, rad
-    double tau_d = 0.0;        // joint torque the position loop asks for, N.m
-    double e_link = 0.0;       // theta_ref - theta_l, rad
+    HDJ_CONTROLLER_SIGNALS(HDJ_SKIP, HDJ_MEMBER, HDJ_MEMBER)
 };
+
+// The rows of controller_signals.def.
+const SignalTable<ControllerInputs, ControllerOutputs>& controller_signals();
 
 class JointController {
 public:
@@ -66,22 +67,36 @@ public:
     // no current yet.
     ControllerOutputs outputs() const { return out_; }
 
-    // Processes the samples in [t, t + h) with inputs held at `in`.
-    void advance(double t, double h, const ControllerInputs& in);
+    // Processes the samples in [t, t + h) with inputs held at `in`. False
+    // (with a message, nothing run) beyond SampleClock::kMaxSamplesPerStep samples.
+    bool advance(double t, double h, const ControllerInputs& in, std::string* message = nullptr);
+
+    // The control law alone at one sample, on a reference from outside
+    // (theta_ref, omega_ref): updates the speed and torque-rate filters and
+    // returns the saturated current command. advance() calls it with the
+    // built-in reference; the built-in experiments (hdjoint.experiments) with theirs.
+    double command(const ControllerInputs& in, double theta_ref, double omega_ref);
 
     // The reference and the load at time t (pure functions of time).
     double reference(double t, double* omega_ref) const;
     double disturbance(double t) const;
 
-    std::vector<double> save_state() const;
-    bool load_state(const std::vector<double>& s);
+    // The state as named fields (parameters excluded; see state_fields.h),
+    // and the same as a flat vector.
+    std::vector<double> save_state() const { return save_fields(*this); }
+    bool load_state(const std::vector<double>& data) { return load_fields(*this, data); }
+    template <class Archive>
+    bool fields(Archive& a) {
+        return clock_.fields(a) && a("has_previous", has_previous_) && a("previous_theta_m", previous_theta_m_) &&
+               a("omega_hat", omega_hat_) && a("previous_tau_fb", previous_tau_fb_) && a("tau_rate", tau_rate_) &&
+               a("integral", integral_) && output_fields(a, controller_signals(), out_);
+    }
 
 private:
     void sample(double t, const ControllerInputs& in);
 
     ControllerParameters p_;
-    double start_time_;
-    long next_sample_ = 0;
+    SampleClock clock_;
     bool has_previous_ = false;
     double previous_theta_m_ = 0.0;
     double omega_hat_ = 0.0;

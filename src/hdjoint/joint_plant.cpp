@@ -10,7 +10,6 @@ namespace hdjoint {
 
 namespace {
 constexpr double kTwoPi = 6.283185307179586;
-constexpr double kStateVersion = 3.0;
 // Floor of the LuGre friction level g(w), N.m: keeps z/g finite when Fc = Fs = 0.
 constexpr double kMinLuGreLevel = 1e-9;
 // The LuGre law's |w| is regularised as sqrt(w^2 + eps^2), eps = this times
@@ -28,6 +27,8 @@ double quantise(double angle, double counts) {
     const double resolution = kTwoPi / counts;
     return std::floor(angle / resolution) * resolution;
 }
+
+HDJ_DEFINE_SIGNAL_TABLE(plant_signals, PlantInputs, PlantOutputs, HDJ_PLANT_SIGNALS)
 
 JointPlant::JointPlant(const Parameters& p) : p_(p) {}
 
@@ -76,14 +77,14 @@ bool JointPlant::initialize(double tau_ext, std::string* message) {
 bool JointPlant::joint_torque(const PlantState& x, double* tau) const { return torque(x, z_, tau); }
 
 bool JointPlant::torque(const PlantState& x, const Vector<3>& z, double* tau) const {
-    const double elastic = total_torsion(x(0), x(2), p_) - kinematic_error(x(0), x(2), p_);
+    const double elastic = total_torsion(x(kThetaM), x(kThetaL), p_) - kinematic_error(x(kThetaM), x(kThetaL), p_);
     double tau_f = 0.0;
     if (!transmitted_torque(elastic, p_, &tau_f)) return false;
     double dk_dm = 0.0, dk_dl = 0.0;
-    if (p_.Df != 0.0) kinematic_error_gradient(x(0), x(2), p_, &dk_dm, &dk_dl);
+    if (p_.Df != 0.0) kinematic_error_gradient(x(kThetaM), x(kThetaL), p_, &dk_dm, &dk_dl);
     // Damping of the deformation only: the kinematic error's share of the
     // torsion rate is geometry (gear meshing), not strain.
-    *tau = tau_f + p_.Df * (x(1) / p_.N - x(3) - dk_dm * x(1) - dk_dl * x(3));
+    *tau = tau_f + p_.Df * (x(kOmegaM) / p_.N - x(kOmegaL) - dk_dm * x(kOmegaM) - dk_dl * x(kOmegaL));
     if (p_.hys_H > 0.0) *tau += z(0);
     if (p_.bw_A > 0.0) *tau += z(1);
     return std::isfinite(*tau);
@@ -122,7 +123,7 @@ template <int S>
 bool JointPlant::model(const Vector<S>& x, double t, const PlantInputs& in, Vector<S>* dx, Matrix<S>* J) const {
     static_assert(S == 4 || S == kPlantStates, "the plant has 4 mechanical and 3 effect states");
     constexpr bool kFull = S == kPlantStates;
-    const double theta_m = x(0), omega_m = x(1), theta_l = x(2), omega_l = x(3);
+    const double theta_m = x(kThetaM), omega_m = x(kOmegaM), theta_l = x(kThetaL), omega_l = x(kOmegaL);
     const double elastic = total_torsion(theta_m, theta_l, p_) - kinematic_error(theta_m, theta_l, p_);
     double tau_f = 0.0;
     if (!transmitted_torque(elastic, p_, &tau_f)) return false;
@@ -152,8 +153,7 @@ bool JointPlant::model(const Vector<S>& x, double t, const PlantInputs& in, Vect
     } else {
         friction = motor_friction(omega_m, p_, scale);
     }
-    double link_load = tau - p_.Bl * omega_l - p_.mgl * std::sin(theta_l) - in.tau_ext;
-    if (p_.Fl != 0.0) link_load -= link_friction(omega_l, p_);
+    const double link_load = link_net_torque(tau, theta_l, omega_l, in.tau_ext, p_);
 
     (*dx)(0) = omega_m;
     (*dx)(1) = (motor_torque(in.i_m, theta_m, p_) - friction - tau / p_.N) / p_.Jm;
@@ -244,7 +244,7 @@ bool JointPlant::ros2_step(double h, const PlantInputs& in, std::string* message
         if (message) {
             std::ostringstream s;
             s.precision(17);
-            s << what << " at theta_m = " << x_(0) << " rad, theta_l = " << x_(2)
+            s << what << " at theta_m = " << x_(kThetaM) << " rad, theta_l = " << x_(kThetaL)
               << " rad (i_m = " << in.i_m << " A, tau_ext = " << in.tau_ext << " N.m)";
             *message = s.str();
         }
@@ -276,9 +276,21 @@ bool JointPlant::ros2_step(double h, const PlantInputs& in, std::string* message
 
 bool JointPlant::advance(double h, const PlantInputs& in, std::string* message) {
     if (!(h > 0.0)) return true;
-    const int substeps = std::max(1, static_cast<int>(std::ceil(h / p_.max_step - 1e-9)));
-    const double dt = h / substeps;
-    for (int i = 0; i < substeps; ++i)
+    // Counted in double first: h/max_step can exceed any integer type.
+    const double needed = std::max(1.0, std::ceil(h / p_.max_step - 1e-9));
+    if (!(needed <= kMaxSubstepsPerAdvance)) {
+        if (message) {
+            std::ostringstream s;
+            s.precision(17);
+            s << "a step of h = " << h << " s needs " << needed << " substeps of max_step = " << p_.max_step
+              << " s; at most " << kMaxSubstepsPerAdvance << " are allowed per step: split the step";
+            *message = s.str();
+        }
+        return false;
+    }
+    const long substeps = static_cast<long>(needed);
+    const double dt = h / static_cast<double>(substeps);
+    for (long i = 0; i < substeps; ++i)
         if (!substep(dt, in, 0, message)) return false;
     return true;
 }
@@ -300,10 +312,10 @@ bool JointPlant::substep(double h, const PlantInputs& in, int depth, std::string
 
 PlantOutputs JointPlant::outputs() const {
     PlantOutputs o;
-    o.theta_m = quantise(x_(0), p_.motor_counts);
-    o.theta_l = quantise(x_(2), p_.link_counts);
-    o.omega_m = x_(1);
-    o.omega_l = x_(3);
+    o.theta_m = quantise(x_(kThetaM), p_.motor_counts);
+    o.theta_l = quantise(x_(kThetaL), p_.link_counts);
+    o.omega_m = x_(kOmegaM);
+    o.omega_link = x_(kOmegaL);
     double tau = 0.0;
     o.tau_joint = joint_torque(x_, &tau) ? tau : std::nan("");
     return o;
@@ -312,33 +324,20 @@ PlantOutputs JointPlant::outputs() const {
 PlantInternals JointPlant::internals() const {
     PlantInternals r;
     r.friction_scale = plant_friction_scale(t_, p_);
-    r.tau_friction = motor_friction(x_(1), p_, r.friction_scale);
-    if (cogging_on(p_)) r.tau_cogging = cogging_torque(x_(0), p_);
-    if (p_.Fl != 0.0) r.tau_link_friction = link_friction(x_(3), p_);
+    r.tau_friction = motor_friction(x_(kOmegaM), p_, r.friction_scale);
+    if (cogging_on(p_)) r.tau_cogging = cogging_torque(x_(kThetaM), p_);
+    if (p_.Fl != 0.0) r.tau_link_friction = link_friction(x_(kOmegaL), p_);
     if (p_.lugre_sigma0 > 0.0) {
         PlantFullState dx;
         r.tau_friction = derivative(full_state(), t_, {}, &dx, nullptr)
-                             ? p_.lugre_sigma0 * z_(2) + p_.lugre_sigma1 * dx(6) + p_.Bm * x_(1)
+                             ? p_.lugre_sigma0 * z_(2) + p_.lugre_sigma1 * dx(6) + p_.Bm * x_(kOmegaM)
                              : std::nan("");
     }
     if (p_.hys_H > 0.0) r.z_dahl = z_(0);
     if (p_.bw_A > 0.0) r.z_bouc_wen = z_(1);
     if (p_.lugre_sigma0 > 0.0) r.z_lugre = z_(2);
-    r.elastic_torsion = total_torsion(x_(0), x_(2), p_) - kinematic_error(x_(0), x_(2), p_);
+    r.elastic_torsion = total_torsion(x_(kThetaM), x_(kThetaL), p_) - kinematic_error(x_(kThetaM), x_(kThetaL), p_);
     return r;
-}
-
-// [version, theta_m, omega_m, theta_l, omega_l, time, z_dahl, z_bouc_wen, z_lugre]
-std::vector<double> JointPlant::save_state() const {
-    return {kStateVersion, x_(0), x_(1), x_(2), x_(3), t_, z_(0), z_(1), z_(2)};
-}
-
-bool JointPlant::load_state(const std::vector<double>& d) {
-    if (d.size() != 9 || d[0] != kStateVersion) return false;
-    x_ << d[1], d[2], d[3], d[4];
-    t_ = d[5];
-    z_ << d[6], d[7], d[8];
-    return true;
 }
 
 }  // namespace hdjoint

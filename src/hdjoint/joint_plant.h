@@ -18,26 +18,29 @@
 // friction (lugre_sigma0). Only when one of these is on does the plant
 // integrate its 7 states (a 7x7 LU); otherwise the 4 mechanical ones, as the
 // paper's model.
+#include <cmath>
 #include <string>
 #include <vector>
 
+#include "friction.h"
 #include "linear_algebra.h"
 #include "parameters.h"
+#include "plant_signals.def"
+#include "signal_table.h"
+#include "state_fields.h"
 
 namespace hdjoint {
 
 struct PlantInputs {
-    double i_m = 0.0;      // A
-    double tau_ext = 0.0;  // N.m, in the sense of gravity's mgl*sin(theta_l)
+    HDJ_PLANT_SIGNALS(HDJ_MEMBER, HDJ_SKIP, HDJ_SKIP)
 };
 
 struct PlantOutputs {
-    double theta_m = 0.0;    // motor encoder reading, rad (quantised)
-    double theta_l = 0.0;    // link encoder reading, rad (quantised)
-    double tau_joint = 0.0;  // torque the flexspline transmits, N.m
-    double omega_m = 0.0;    // rad/s
-    double omega_l = 0.0;    // rad/s
+    HDJ_PLANT_SIGNALS(HDJ_SKIP, HDJ_MEMBER, HDJ_MEMBER)
 };
+
+// The rows of plant_signals.def.
+const SignalTable<PlantInputs, PlantOutputs>& plant_signals();
 
 // Torques inside the joint that no output shows (for analysis and diagnosis).
 struct PlantInternals {
@@ -53,6 +56,7 @@ struct PlantInternals {
 
 // Mechanical state: [theta_m, omega_m, theta_l, omega_l].
 using PlantState = Vector<4>;
+enum PlantStateIndex { kThetaM = 0, kOmegaM = 1, kThetaL = 2, kOmegaL = 3 };
 // With the states of the beyond-paper effects: [..., z_dahl, z_bouc_wen, z_lugre].
 constexpr int kPlantStates = 7;
 using PlantFullState = Vector<kPlantStates>;
@@ -66,8 +70,14 @@ public:
     // gravity and `tau_ext`. False (with a message) when no torque holds it.
     bool initialize(double tau_ext, std::string* message = nullptr);
 
+    // At most this many substeps of max_step per advance (10^5: 10 s at the
+    // default max_step, well under a second of computing); a longer advance
+    // is refused whole, with a message.
+    static constexpr double kMaxSubstepsPerAdvance = 1e5;
+
     // Advance by h seconds with inputs held. False (with a message) when the
-    // state leaves the model's domain (singular torsion, non-finite state).
+    // state leaves the model's domain (singular torsion, non-finite state)
+    // or h needs more than kMaxSubstepsPerAdvance substeps.
     bool advance(double h, const PlantInputs& in, std::string* message = nullptr);
 
     PlantOutputs outputs() const;
@@ -82,8 +92,17 @@ public:
 
     PlantInternals internals() const;
 
-    std::vector<double> save_state() const;
-    bool load_state(const std::vector<double>& data);
+    // The state as named fields (parameters excluded; see state_fields.h).
+    template <class Archive>
+    bool fields(Archive& a) {
+        long version = kLayoutVersion;  // a counter: checked in every reading
+        return a("plant_state_version", version, kLayoutVersion, kLayoutVersion) && a("theta_m", x_(kThetaM)) &&
+               a("omega_m", x_(kOmegaM)) && a("theta_l", x_(kThetaL)) && a("omega_l", x_(kOmegaL)) &&
+               a("time", t_, 0.0, kUnbounded) && a("z_dahl", z_(0)) && a("z_bouc_wen", z_(1)) && a("z_lugre", z_(2));
+    }
+    // The same as a flat vector ([version, theta_m, omega_m, theta_l, omega_l, time, z_dahl, z_bouc_wen, z_lugre]).
+    std::vector<double> save_state() const { return save_fields(*this); }
+    bool load_state(const std::vector<double>& data) { return load_fields(*this, data); }
 
     // State derivative at time t (since initialize) and its Jacobian by the
     // state (analytic; public so tests can check it against differences).
@@ -101,12 +120,26 @@ private:
     bool extra_states() const { return p_.hys_H > 0.0 || p_.bw_A > 0.0 || p_.lugre_sigma0 > 0.0; }
     bool substep(double h, const PlantInputs& in, int depth, std::string* message);
     static constexpr int kMaxHalvings = 10;
+    static constexpr long kLayoutVersion = 3;
 
     Parameters p_;
     PlantState x_ = PlantState::Zero();
     Vector<3> z_ = Vector<3>::Zero();  // z_dahl, z_bouc_wen, z_lugre
     double t_ = 0.0;
 };
+
+// The link's equation of motion, Jl*alpha_l = link_net_torque(...): the
+// transmitted torque less damping, gravity, the external torque and link friction.
+inline double link_net_torque(double tau, double theta_l, double omega_l, double tau_ext, const Parameters& p) {
+    double load = tau - p.Bl * omega_l - p.mgl * std::sin(theta_l) - tau_ext;
+    if (p.Fl != 0.0) load -= link_friction(omega_l, p);
+    return load;
+}
+// The same solved for the transmitted torque with no external torque: what
+// the link's own motion needs (the diagnosis's link channel).
+inline double link_torque_needed(double theta_l, double omega_l, double alpha_l, const Parameters& p) {
+    return p.Jl * alpha_l - link_net_torque(0.0, theta_l, omega_l, 0.0, p);
+}
 
 // Encoder reading: whole counts (floor), 0 counts means no quantisation.
 double quantise(double angle, double counts_per_revolution);

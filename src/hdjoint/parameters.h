@@ -47,7 +47,7 @@ long delay_samples(const Parameters& p);
 constexpr double kMinEncoderCounts = 1.0;
 
 // First problem with a parameter set (name and value), or nothing when the
-// whole set is valid. `estimator` / `plant` pick the parameters each FMU carries.
+// whole set is valid. `estimator` and `plant` check only the parameters those carry.
 std::optional<std::string> validate(const Parameters& p, bool estimator, bool plant);
 
 }  // namespace hdjoint

@@ -9,8 +9,6 @@
 namespace hdjoint {
 
 namespace {
-constexpr double kStateVersion = 4.0;
-
 // std_nis_time: a deviation scaled by the running mean m of NIS/2 (2
 // measurements each), never below the filter's own.
 double consistent(double std, double nis, double Ts, double time, double* mean) {
@@ -29,8 +27,10 @@ std::string describe_input(const EstimatorInputs& in) {
 }
 }  // namespace
 
-TorqueEstimator::TorqueEstimator(const Parameters& p)
-    : p_(p), system_(p, p.Ts), measurement_(p), compliance_(p), joint_(p) {
+HDJ_DEFINE_SIGNAL_TABLE(estimator_signals, EstimatorInputs, EstimatorOutputs, HDJ_ESTIMATOR_SIGNALS)
+
+TorqueEstimator::TorqueEstimator(const Parameters& p, double start_time)
+    : p_(p), system_(p, p.Ts), measurement_(p), compliance_(p), joint_(p), clock_(start_time, p.Ts) {
     Q_.diagonal() << p.ukf_q_omega * p.ukf_q_omega, p.ukf_q_tau * p.ukf_q_tau;
     R_.diagonal() << p.ukf_r_omega * p.ukf_r_omega, p.ukf_r_torsion * p.ukf_r_torsion;
     Matrix<2> P0 = Matrix<2>::Zero();
@@ -60,7 +60,7 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
     if (!c.ready) {
         // The delay line is filling: no angles yet for this current. Show the
         // compliance model on the first angles; the filter waits.
-        out_ = {c.tau, c.tau, 0.0, c.dtheta_f, p_.ukf_p0_tau, 0.0, 0.0, c.tau, p_.jsf_p0_load, 0.0};
+        show_compliance(c.tau, c.dtheta_f);
         return EstimatorStatus::Ok;
     }
 
@@ -92,7 +92,7 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
     const FilterStatus joint = joint_.step(c.theta_m, c.theta_l, {in.i_m, c.z, t});
     out_.tau_hat = joint_.output().tau;
     out_.tau_hat_std = consistent(joint_.output().tau_std, joint_.output().nis, p_.Ts, p_.std_nis_time, &nis_mean_hat_);
-    out_.load = joint_.output().load;
+    out_.tau_load = joint_.output().load;
     // eq. (2)'s input, with cogging, Stribeck friction and the drift when they are on.
     previous_u_ = motor_torque(in.i_m, c.theta_m, p_) - coulomb_friction(x(0), p_, friction_drift_scale(t, p_));
     ++samples_;
@@ -124,40 +124,17 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
     return EstimatorStatus::Ok;
 }
 
-// [version, UKF state (2) and covariance (4), outputs (7), previous theta_m,
-//  previous u, samples, hysteresis torque, compliance model state, joint-state
-//  filter state, tau_hat outputs (3), NIS means of the UKF and the joint-state filter]
-std::vector<double> TorqueEstimator::save_state() const {
-    const Vector<2>& x = ukf_.state();
-    const Matrix<2>& P = ukf_.covariance();
-    std::vector<double> d = {kStateVersion, x(0), x(1), P(0, 0), P(0, 1), P(1, 0), P(1, 1),
-                             out_.tau_ukf, out_.tau_compliance, out_.omega_m, out_.dtheta_f, out_.tau_ukf_std,
-                             out_.nis, previous_theta_m_, previous_u_, static_cast<double>(samples_),
-                             out_.hysteresis_torque};
-    compliance_.save(&d);
-    joint_.save(&d);
-    d.insert(d.end(), {out_.tau_hat, out_.tau_hat_std, out_.load, nis_mean_ukf_, nis_mean_hat_});
-    return d;
+void TorqueEstimator::show_start(const EstimatorInputs& in) {
+    const ComplianceEstimate c = compliance_estimate(in.i_m, in.theta_m, in.theta_l, p_);
+    show_compliance(c.valid ? c.tau : 0.0, c.valid ? c.dtheta_f : 0.0);
 }
 
-bool TorqueEstimator::load_state(const std::vector<double>& d) {
-    std::size_t cursor = 17;
-    ComplianceModel compliance = compliance_;
-    JointStateFilter joint = joint_;
-    if (d.size() < cursor || d[0] != kStateVersion || !compliance.load(d, &cursor) || !joint.load(d, &cursor) ||
-        cursor + 5 != d.size())
-        return false;
-    ukf_.state() << d[1], d[2];
-    ukf_.covariance() << d[3], d[4], d[5], d[6];
-    out_ = {d[7], d[8], d[9], d[10], d[11], d[12], d[16], d[cursor], d[cursor + 1], d[cursor + 2]};
-    nis_mean_ukf_ = d[cursor + 3];
-    nis_mean_hat_ = d[cursor + 4];
-    previous_theta_m_ = d[13];
-    previous_u_ = d[14];
-    samples_ = static_cast<long>(d[15]);
-    compliance_ = compliance;
-    joint_ = joint;
-    return true;
+void TorqueEstimator::show_compliance(double tau, double dtheta_f) {
+    out_ = EstimatorOutputs{};
+    out_.tau_ukf = out_.tau_compliance = out_.tau_hat = tau;
+    out_.dtheta_f = dtheta_f;
+    out_.tau_ukf_std = p_.ukf_p0_tau;
+    out_.tau_hat_std = p_.jsf_p0_load;
 }
 
 }  // namespace hdjoint

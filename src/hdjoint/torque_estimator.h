@@ -2,35 +2,32 @@
 // The paper's torque estimator: the compliance model of eq. (3)-(8) and the
 // UKF of eq. (9)-(31), run at a fixed sample period on encoder angles and
 // motor current; beside them the joint-state filter (tau_hat, beyond the paper).
+#include <algorithm>
 #include <string>
 #include <vector>
 
 #include "compliance_model.h"
+#include "estimator_signals.def"
 #include "joint_state_filter.h"
 #include "paper_ukf_models.h"
 #include "parameters.h"
+#include "sample_clock.h"
+#include "signal_table.h"
 #include "ukf.h"
 
 namespace hdjoint {
 
 struct EstimatorInputs {
-    double i_m = 0.0;      // A
-    double theta_m = 0.0;  // rad
-    double theta_l = 0.0;  // rad
+    HDJ_ESTIMATOR_SIGNALS(HDJ_MEMBER, HDJ_SKIP, HDJ_SKIP)
 };
 
+// The FMU's outputs, then the batch path's internal signals (nis, ...).
 struct EstimatorOutputs {
-    double tau_ukf = 0.0;         // N.m
-    double tau_compliance = 0.0;  // N.m
-    double omega_m = 0.0;         // rad/s
-    double dtheta_f = 0.0;        // rad
-    double tau_ukf_std = 0.0;     // N.m
-    double nis = 0.0;             // normalised innovation squared of the last update
-    double hysteresis_torque = 0.0;  // Dahl hysteresis torque inside tau_compliance, N.m (0 when off)
-    double tau_hat = 0.0;         // joint-state filter torque, N.m (beyond the paper)
-    double tau_hat_std = 0.0;     // its standard deviation, N.m
-    double load = 0.0;            // the filter's link-load state w, N.m
+    HDJ_ESTIMATOR_SIGNALS(HDJ_SKIP, HDJ_MEMBER, HDJ_MEMBER)
 };
+
+// The rows of estimator_signals.def (value references: see there).
+const SignalTable<EstimatorInputs, EstimatorOutputs>& estimator_signals();
 
 enum class EstimatorStatus {
     Ok,
@@ -40,16 +37,33 @@ enum class EstimatorStatus {
     SampleRejected,      // the joint-state filter rejected an outlier sample and predicted over it (can go on)
     SingularTorsion,     // |Cf*Kf*dtheta_f| >= pi/2: no torque explains the torsion
     InvalidInput,        // NaN or infinite input
+    StepTooLong,         // a step would run more than SampleClock::kMaxSamplesPerStep samples
 };
 
 // True for statuses after which the estimate is still usable.
 inline bool recoverable(EstimatorStatus s) {
-    return s != EstimatorStatus::SingularTorsion && s != EstimatorStatus::InvalidInput;
+    return s != EstimatorStatus::SingularTorsion && s != EstimatorStatus::InvalidInput &&
+           s != EstimatorStatus::StepTooLong;
 }
 
 class TorqueEstimator {
 public:
-    explicit TorqueEstimator(const Parameters& p);
+    // Samples fall at start_time + k*Ts.
+    explicit TorqueEstimator(const Parameters& p, double start_time = 0.0);
+
+    // The outputs before the first sample: the compliance model on the start
+    // inputs (zero torque where the torsion is singular) and the initial deviations.
+    void show_start(const EstimatorInputs& in);
+
+    // Runs the samples due before `end` (see SampleClock) on the inputs `in`,
+    // held; `after_sample()` is called after each. Returns the worst status
+    // (StepTooLong, with nothing run, beyond the step bound) and the message
+    // of the first sample that was not Ok.
+    template <class AfterSample>
+    EstimatorStatus advance_to(double end, const EstimatorInputs& in, std::string* message, AfterSample after_sample);
+    EstimatorStatus advance_to(double end, const EstimatorInputs& in, std::string* message = nullptr) {
+        return advance_to(end, in, message, [] {});
+    }
 
     // Process one sample (inputs valid at this sample's time). `message`,
     // when given, names what went wrong for any status but Ok. With i_delay
@@ -60,15 +74,24 @@ public:
     const EstimatorOutputs& outputs() const { return out_; }
     const Parameters& parameters() const { return p_; }
     long samples() const { return samples_; }
+    // Eq. (11)'s input of the last sample: Kt*i_m (+ cogging) - tau_fm(omega_m, t).
+    double ukf_input() const { return previous_u_; }
 
-    // Flat, versioned state for FMU serialisation (parameters excluded).
-    std::vector<double> save_state() const;
-    bool load_state(const std::vector<double>& data);
+    // The state as named fields (parameters excluded; see state_fields.h),
+    // and the same as a flat vector.
+    std::vector<double> save_state() const { return save_fields(*this); }
+    bool load_state(const std::vector<double>& data) { return load_fields(*this, data); }
+    template <class Archive>
+    bool fields(Archive& a);
 
     // The joint-state filter (tau_hat): its last sample, for the smoother.
     const JointStateFilter& joint_filter() const { return joint_; }
 
 private:
+    // Outputs that show the compliance model only (before the filters start).
+    void show_compliance(double tau, double dtheta_f);
+    static constexpr long kStateVersion = 5;  // 5: the NIS means of std_nis_time
+
     Parameters p_;
     PaperSystemModel system_;
     PaperMeasurementModel measurement_;
@@ -83,6 +106,37 @@ private:
     // Running means of NIS/2 of the paper UKF and the joint-state filter (std_nis_time).
     double nis_mean_ukf_ = 1.0, nis_mean_hat_ = 1.0;
     long samples_ = 0;
+    SampleClock clock_;
 };
+
+template <class AfterSample>
+EstimatorStatus TorqueEstimator::advance_to(double end, const EstimatorInputs& in, std::string* message,
+                                            AfterSample after_sample) {
+    EstimatorStatus worst = EstimatorStatus::Ok;
+    std::string first;
+    const bool bounded = clock_.run_until(end, [&](double) {
+        std::string m;
+        const EstimatorStatus s = step(in, &m);
+        if (s != EstimatorStatus::Ok && first.empty()) first = m;
+        worst = std::max(worst, s);
+        if (!recoverable(s)) return false;
+        after_sample();
+        return true;
+    }, &first);
+    if (!bounded && worst == EstimatorStatus::Ok) worst = EstimatorStatus::StepTooLong;
+    if (message) *message = first;
+    return worst;
+}
+
+template <class Archive>
+bool TorqueEstimator::fields(Archive& a) {
+    long version = kStateVersion;  // a counter: checked in every reading
+    return a("estimator_state_version", version, kStateVersion, kStateVersion) && a("ukf_state", ukf_.state()) &&
+           a("ukf_covariance", ukf_.covariance()) && a("previous_theta_m", previous_theta_m_) &&
+           a("previous_u", previous_u_) && a("nis_mean_ukf", nis_mean_ukf_) && a("nis_mean_hat", nis_mean_hat_) &&
+           output_fields(a, estimator_signals(), out_) &&
+           a.part("compliance_model", compliance_) && a.part("joint_state_filter", joint_) &&
+           a("samples", samples_) && clock_.fields(a);
+}
 
 }  // namespace hdjoint

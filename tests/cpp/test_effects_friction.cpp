@@ -125,7 +125,7 @@ TEST(EffectsFriction, EstimatorDriftScalesTheUkfInput) {
         const double theta_m = 0.02 * k * k * 1e-3;  // accelerating motor
         const EstimatorInputs in{0.3, theta_m, theta_m / p.N};
         ASSERT_EQ(e.step(in), EstimatorStatus::Ok);
-        const double u = e.save_state()[14];  // eq. (11)'s input of this sample
+        const double u = e.ukf_input();  // eq. (11)'s input of this sample
         const double scale = 1.0 + p.Fc_drift * k * p.Ts;
         EXPECT_NEAR(u, p.Kt * in.i_m - scale * coulomb_friction(e.outputs().omega_m, p), 1e-15) << k;
     }
@@ -192,7 +192,7 @@ TEST(EffectsFriction, EstimatorInputCarriesCogging) {
         const EstimatorInputs in{0.1, 0.05 * k, 0.05 * k / p.N};
         ASSERT_EQ(e.step(in), EstimatorStatus::Ok);
         const double cog = p.cog_a * std::cos(4.0 * in.theta_m) + p.cog_b * std::sin(4.0 * in.theta_m);
-        EXPECT_NEAR(e.save_state()[14], p.Kt * in.i_m + cog - coulomb_friction(e.outputs().omega_m, p), 1e-15);
+        EXPECT_NEAR(e.ukf_input(), p.Kt * in.i_m + cog - coulomb_friction(e.outputs().omega_m, p), 1e-15);
     }
 }
 

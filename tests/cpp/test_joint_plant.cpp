@@ -161,7 +161,7 @@ TEST(JointPlant, SignConventions) {
         EXPECT_GT(j.state()(2), x0(2));
         EXPECT_GT(j.outputs().tau_joint, 0.0);
         EXPECT_GT(j.outputs().omega_m, 0.0);
-        EXPECT_GT(j.outputs().omega_l, 0.0);
+        EXPECT_GT(j.outputs().omega_link, 0.0);
     }
     {
         // Positive tau_ext acts like gravity's mgl*sin(theta_l): it pushes the
@@ -453,7 +453,7 @@ TEST(JointPlant, SaveLoadStateContinuesExactly) {
         ASSERT_EQ(oa.theta_l, ob.theta_l) << k;
         ASSERT_EQ(oa.tau_joint, ob.tau_joint) << k;
         ASSERT_EQ(oa.omega_m, ob.omega_m) << k;
-        ASSERT_EQ(oa.omega_l, ob.omega_l) << k;
+        ASSERT_EQ(oa.omega_link, ob.omega_link) << k;
     }
     EXPECT_EQ(a.save_state(), b.save_state());
     EXPECT_NE(a.save_state(), saved);

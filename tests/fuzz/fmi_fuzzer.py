@@ -64,7 +64,7 @@ ALLOWED = {
 # Where the standard's wording leaves doubt: neither accepting nor refusing is a finding.
 UNSETTLED = {"status": {INIT}}
 # Serialised layout (fmu/fmi2_glue.cpp): doubles; these slots are checked exactly.
-MAGIC_SLOT, STATE_SLOT, COUNT_SLOT = 0, 1, 6
+MAGIC_SLOT, STATE_SLOT, COUNT_SLOT = 0, 2, 7  # header: magic, version, state, time, start, stop, stop-defined, count
 
 LEGAL_STEPS = (1e-3, 2e-3, 1e-2, 0.1)
 EXTREME_STEPS = (215.0, 1e5, 2.2e5, 1e6, 1e300)

@@ -12,7 +12,6 @@ from hdjoint.fmus import fmu_path
 SEQUENCES_PER_FMU = 80
 TIMEOUT = 1.5  # s: a normal sequence takes ~50 ms
 pytestmark = pytest.mark.slow  # one shared fuzz run: ~20 s
-ARCH_FMU = pytest.mark.xfail(strict=True, reason="FMU fixes of issue 12 land from branch arch-fmu")
 
 
 @pytest.fixture(scope="module")
@@ -43,17 +42,14 @@ def test_no_fmu_crashes(outcomes):
     assert findings(outcomes, "crash") == []
 
 
-@ARCH_FMU
 def test_no_fmu_hangs(outcomes):
     assert findings(outcomes, "hang") == []
 
 
-@ARCH_FMU
 def test_no_illegal_call_is_accepted(outcomes):
     assert findings(outcomes, "illegal call accepted") == []
 
 
-@ARCH_FMU
 def test_no_corrupted_state_is_accepted(outcomes):
     assert findings(outcomes, "corrupted state accepted") == []
 
