@@ -8,6 +8,8 @@
 
 namespace hdjoint {
 
+using namespace plant_state;
+
 namespace {
 constexpr double kTwoPi = 6.283185307179586;
 // Floor of the LuGre friction level g(w), N.m: keeps z/g finite when Fc = Fs = 0.

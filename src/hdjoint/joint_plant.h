@@ -56,7 +56,9 @@ struct PlantInternals {
 
 // Mechanical state: [theta_m, omega_m, theta_l, omega_l].
 using PlantState = Vector<4>;
-enum PlantStateIndex { kThetaM = 0, kOmegaM = 1, kThetaL = 2, kOmegaL = 3 };
+namespace plant_state {  // its own namespace: the joint-state filter names its states too
+enum Index : int { kThetaM = 0, kOmegaM = 1, kThetaL = 2, kOmegaL = 3 };
+}  // namespace plant_state
 // With the states of the beyond-paper effects: [..., z_dahl, z_bouc_wen, z_lugre].
 constexpr int kPlantStates = 7;
 using PlantFullState = Vector<kPlantStates>;
@@ -96,8 +98,8 @@ public:
     template <class Archive>
     bool fields(Archive& a) {
         long version = kLayoutVersion;  // a counter: checked in every reading
-        return a("plant_state_version", version, kLayoutVersion, kLayoutVersion) && a("theta_m", x_(kThetaM)) &&
-               a("omega_m", x_(kOmegaM)) && a("theta_l", x_(kThetaL)) && a("omega_l", x_(kOmegaL)) &&
+        return a("plant_state_version", version, kLayoutVersion, kLayoutVersion) && a("theta_m", x_(plant_state::kThetaM)) &&
+               a("omega_m", x_(plant_state::kOmegaM)) && a("theta_l", x_(plant_state::kThetaL)) && a("omega_l", x_(plant_state::kOmegaL)) &&
                a("time", t_, 0.0, kUnbounded) && a("z_dahl", z_(0)) && a("z_bouc_wen", z_(1)) && a("z_lugre", z_(2));
     }
     // The same as a flat vector ([version, theta_m, omega_m, theta_l, omega_l, time, z_dahl, z_bouc_wen, z_lugre]).
