@@ -95,6 +95,14 @@ class Order:
     prominence: float  # power at this order over the median power at off-orders
 
 
+def candidate_orders(angle: str, travel: float) -> list[float]:
+    """The order grid searched on `angle` ("theta_m": half orders up to 12,
+    "theta_l": whole orders up to 40), keeping orders the recording's travel
+    (rad) covers at least 1.5 times: a ripple needs periods to be told from a drift."""
+    grid = [k / 2 for k in range(1, 25)] if angle == "theta_m" else [float(k) for k in range(1, 41)]
+    return [k for k in grid if k * travel >= 3 * np.pi]
+
+
 def _basis(angle, order, through):
     """cos, sin of `order` x `angle` (through the channel's filter, if it has
     one: a ripple the channel sees smoothed fades with speed) and a constant."""
