@@ -89,3 +89,25 @@ def test_the_simulated_null_of_a_structureless_regressor_is_centred_below_signif
     jac = rng.normal(size=(1, n, 2))
     z = null_z(noise, jac, np.flatnonzero(train), fold, test)
     assert abs(np.mean(z)) < 1.5 and np.mean(z > 3.0) < 0.1
+
+
+def test_a_binned_structure_is_significant_against_the_simulated_null_and_noise_is_not():
+    """The unexplained-structure scans' test (findings.remaining_structure): bins as regressors."""
+    from hdjoint.significance import p_value
+    from hdjoint.structure import bins_of, held_out_gain
+    rng = np.random.default_rng(8)
+    n = 8000
+    fold = folds(n, 40)
+    train, test = fold % 2 == 0, fold % 2 == 1
+    speed = np.sin(np.arange(n) / 300.0)
+    noise = np.convolve(rng.normal(size=n), np.ones(10) / 10, mode="same")
+    for structure, significant in ((1.0 * np.sign(speed) * noise.std(), True), (0.0, False)):
+        r = noise + structure
+        index, _, _ = bins_of(speed, r)
+        bins = np.zeros((1, n, index.max() + 2))
+        bins[0, np.arange(n), index] = 1.0
+        bins[0, :, -1] = 1.0
+        coef = np.linalg.lstsq(bins[0][train], r[train], rcond=None)[0]
+        z = held_out_gain(r, bins[0] @ coef, fold, test).z
+        p = p_value(z, null_z(NullNoise(r[None, :]).replicates([0]), bins, np.flatnonzero(train), fold, test))
+        assert (p < 0.01) == significant, (z, p)
