@@ -547,9 +547,11 @@ class Diagnosis:
         for effect_id, params in moved.items():
             edge = {c.name: c.prior.centre + math.copysign(RESIZE_Z * c.prior.std, c.z) for c in params}
             free = [n for n in self.calibrated_names + self._added_names if n not in edge]
+            # Both fits from the same start and by the same steps: only the held parameters differ.
             held = self.fit(dict(p, **edge), free, self.channels)
-            gain = held_out_gain_sq(self._squared(held.params, self.channels), self._squared(p, self.channels),
-                                    self.fold, self.test)
+            unheld = self.fit(p, free + list(edge), self.channels)
+            gain = held_out_gain_sq(self._squared(held.params, self.channels),
+                                    self._squared(unheld.params, self.channels), self.fold, self.test)
             p_value = float(norm.sf(gain.z))
             self.say(f"{effect_id}: {', '.join(edge)} beyond tolerance; held to it, held-out gain "
                      f"{100 * gain.gain:.2f} % (z = {gain.z:.1f})")
