@@ -467,15 +467,11 @@ class Diagnosis:
         mse_b, mse_a = np.mean(before[self.train]), np.mean(after[self.train])
         dbic = n_eff * math.log(max(mse_a, 1e-300) / max(mse_b, 1e-300)) + len(names) * math.log(n_eff)
         hypothesis = Hypothesis(effect, p, fit.params, names, gain, float(dbic), orders, worst_channel_ratio=worst)
-        # The simulated null: the same test on noise with the residual's colour.
-        # The fit searches several starting basins and keeps the best, so the
-        # null statistic is the best of the hypothesis linearised in each
-        # basin (its starts and the fit itself), not in the fit's alone.
+        # The simulated null: the same test on noise with the residual's colour,
+        # the hypothesis linearised at its fit.
         rows = [self.channels.index(c) for c in channels]
-        noise = self._noise.replicates(rows)
-        points = [fit.params] + [dict(trial, **start) for start in effect.starts]
-        z_null = np.max([null_z(noise, self._jacobian(q, names_all, channels), self.fit_index, self.fold, self.test)
-                         for q in points], axis=0)
+        jac = self._jacobian(fit.params, names_all, channels)
+        z_null = null_z(self._noise.replicates(rows), jac, self.fit_index, self.fold, self.test)
         hypothesis.p_raw = p_value(gain.z, z_null)
         return hypothesis
 

@@ -111,3 +111,20 @@ def test_a_binned_structure_is_significant_against_the_simulated_null_and_noise_
         z = held_out_gain(r, bins[0] @ coef, fold, test).z
         p = p_value(z, null_z(NullNoise(r[None, :]).replicates([0]), bins, np.flatnonzero(train), fold, test))
         assert (p < 0.01) == significant, (z, p)
+
+
+def test_the_vectorised_null_statistic_is_the_held_out_gain_z_of_each_replicate():
+    from hdjoint.structure import held_out_gain_sq
+    rng = np.random.default_rng(1)
+    n = 6000
+    fold = folds(n, 40)
+    train, test = fold % 2 == 0, fold % 2 == 1
+    noise = NullNoise(rng.normal(size=(2, n))).replicates([0, 1])
+    jac = rng.normal(size=(2, n, 3))
+    fit_rows = np.flatnonzero(train)[::2]
+    reference = []
+    for b in range(len(noise)):
+        delta = np.linalg.lstsq(jac[:, fit_rows, :].reshape(-1, 3), noise[b][:, fit_rows].reshape(-1), rcond=None)[0]
+        change = np.einsum("csk,k->cs", jac, delta)
+        reference.append(held_out_gain_sq((noise[b] ** 2).sum(0), ((noise[b] - change) ** 2).sum(0), fold, test).z)
+    np.testing.assert_allclose(null_z(noise, jac, fit_rows, fold, test), reference, rtol=1e-9, atol=1e-9)
