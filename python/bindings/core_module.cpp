@@ -341,6 +341,11 @@ nb::list table() {
         row["scope"] = p.scope == Scope::Shared ? "shared" : p.scope == Scope::Plant ? "plant" : "estimator";
         row["description"] = p.description;
         row["value_reference"] = i;
+        // The calibration prior (parameter_tolerance.def), NaN when never calibrated.
+        const ToleranceInfo* tol = find_tolerance(p.name);
+        row["tolerance_relative"] = tol ? tol->relative : std::nan("");
+        row["tolerance_absolute"] = tol ? tol->absolute : std::nan("");
+        row["tolerance_source"] = tol ? tol->source : "";
         rows.append(row);
     }
     return rows;

@@ -82,9 +82,9 @@ def truth_for(case: Case) -> dict[str, float]:
     return truth
 
 
-def record(case: Case, duration: float = 30.0) -> Recording:
-    """Simulate the case's joint on the paper experiment and record it."""
-    rec = experiments.run("paper", joint=truth_for(case), nominal=nominal_for(case), duration=duration,
+def record(case: Case, duration: float = 30.0, experiment: str = "paper") -> Recording:
+    """Simulate the case's joint on an experiment (the paper's by default) and record it."""
+    rec = experiments.run(experiment, joint=truth_for(case), nominal=nominal_for(case), duration=duration,
                           sensors=experiments.Sensors(seed=case.seed))
     if case.current_lag > 0.0:
         rec.i_m = _lagged(rec.time, rec.i_m, case.current_lag)

@@ -108,8 +108,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(run=cmd_estimate)
 
     p = sub.add_parser("diagnose", help="locate and name what the model leaves out of a recording")
-    p.add_argument("recording")
-    p.add_argument("--params", help="the nominal parameter set (JSON)")
+    p.add_argument("recording", nargs="+",
+                   help="one recording, or several of the same joint (their shared parameters are fitted jointly)")
+    p.add_argument("--params", help="the nominal parameter set (JSON; an optional \"tolerance\" object "
+                                    "states relative tolerances, e.g. {\"Kt\": 0.1})")
     p.add_argument("--out", required=True, help="directory for findings.json, params.json, params.ssv, report.html")
     p.add_argument("--validate", nargs="+", default=[], metavar="RECORDING",
                    help="other recordings of the same joint: the corrected model is checked on them (never fitted)")

@@ -1,18 +1,25 @@
 """The mismatch diagnosis: calibrate, locate, name, model, show the fit.
 
   1. Calibrate: fit the nominal model's own parameters (those it switches
-     on, plus offsets and gains) on the training folds, within physical bounds.
+     on, plus offsets, gains and shape parameters) on the training folds:
+     maximum a posteriori with each parameter's tolerance as its prior
+     (calibration.py), with a Laplace posterior for each.
   2. Locate: residual channels between independent torque estimates (see
      channels.py), scanned for held-out structure over time, regime and angle.
   3. Name: forward selection over the effect library (effects.py): each
-     candidate is fitted on the training folds; the best one by held-out gain
-     is accepted when the gain is significant fold by fold and BIC agrees;
+     candidate is fitted on the training folds; its held-out gain gets a
+     p-value from a simulated null (significance.py), corrected across the
+     round's hypotheses (Benjamini-Hochberg); the best one by held-out gain
+     is accepted when it is significant and BIC agrees, or reported with a
+     look-alike that explains the same structure as one ambiguous finding;
      repeat until nothing significant remains.
   4. Model: the accepted effects are parameters of the C++ model; the
      corrected set is written as params.json (and .ssv).
   5. Show the fit: RMS before and after on all data and on held-out folds,
      per finding; the torque estimator with nominal vs corrected parameters.
-  6. Verdict: missing_physics, consistent, or unexplained (structure remains
+  6. Resized: a calibrated parameter beyond its tolerance is a finding of
+     the effect it belongs to.
+  7. Verdict: missing_physics, consistent, or unexplained (structure remains
      that no hypothesis explains, with where).
 """
 from __future__ import annotations
@@ -28,11 +35,13 @@ from scipy.stats import norm
 from threadpoolctl import threadpool_limits
 
 from . import parameters
+from .calibration import RESIZE_Z, Calibrated, Prior, posterior_std, priors
 from .channels import ESTIMATES, SMOOTHED_PARTS, Prepared, depends_on
-from .effects import ALWAYS_CALIBRATED, EFFECTS, KINEMATIC_EQ7, Effect, calibrated_parameters, testable
+from .effects import ALWAYS_CALIBRATED, EFFECTS, Effect, calibrated_parameters, orthogonal_parameters, owner, testable
 from .recording import Recording
+from .significance import FALSE_DISCOVERY_RATE, NullNoise, benjamini_hochberg, null_z, p_value
 from .signals import folds as make_folds, kinematics, sample_windows, window_labels
-from .structure import HeldOutGain, Order, held_out_gain_sq, order_search, scan
+from .structure import HeldOutGain, Order, candidate_orders, held_out_gain_sq, order_search
 
 MIN_SAMPLES = 500
 MIN_DURATION = 2.0
@@ -41,6 +50,11 @@ FOLDS = 40  # contiguous blocks; even ones fit, odd ones are held out
 # A longer recording is analysed in FOLDS windows spread over it, this long
 # in all: the diagnosis time then stops growing with the recording's length.
 ANALYSED_SECONDS = 120.0
+# Two look-alikes are told apart when the better one's held-out gain beats the
+# other's by this many standard errors over the folds, and the other explains
+# at most this share of what the better one does; otherwise they are reported together.
+SEPARATED_Z = 2.0
+SEPARATED_RATIO = 0.8
 
 
 class DiagnosisError(ValueError):
@@ -80,6 +94,41 @@ def check_recording(rec: Recording) -> None:
         g = gaps[0]
         raise DiagnosisError(f"{where}: a gap of {dt[g]:.4g} s after t = {rec.time[g]:.6g} s (line {g + 2}); "
                              f"the median step is {step:.4g} s. Split the recording at its gaps.")
+
+
+def joined(recordings: list[Recording]) -> tuple[Recording, np.ndarray, np.ndarray, np.ndarray]:
+    """Several recordings of one joint as one analysed recording: each one's
+    analysed windows, one after the other on a continuous time axis. Returns
+    it, the first sample of each contiguous window, each sample's time since
+    its own recording's start, and the fold labels (even fit, odd held out)."""
+    if len({r.tau_sensor is None for r in recordings}) > 1:
+        raise DiagnosisError("the recordings must all have a torque sensor column or none of them")
+    pieces, starts, t_rel, fold = [], [], [], []
+    offset, label = 0, 0
+    for rec in recordings:
+        part, part_starts = sample_windows(rec, ANALYSED_SECONDS / len(recordings), FOLDS)
+        labels = make_folds(len(part), FOLDS) if len(part_starts) == 1 else window_labels(len(part), part_starts)
+        pieces.append(part)
+        starts += list(part_starts + offset)
+        t_rel.append(part.time - rec.time[0])
+        fold.append(labels + label)
+        offset += len(part)
+        label += int(labels.max()) + 1 + int(labels.max() + 1) % 2  # keep even = fit in every recording
+    if len(pieces) == 1:
+        return pieces[0], np.array(starts), t_rel[0], fold[0]
+    step = float(np.median(np.diff(pieces[0].time)))
+    times, end = [], 0.0
+    for part in pieces:
+        times.append(part.time - part.time[0] + end)
+        end = times[-1][-1] + step
+
+    def cat(name):
+        arrays = [getattr(r, name) for r in pieces]
+        return None if arrays[0] is None else np.concatenate(arrays)
+
+    rec = Recording(time=np.concatenate(times), i_m=cat("i_m"), theta_m=cat("theta_m"), theta_l=cat("theta_l"),
+                    tau_sensor=cat("tau_sensor"), extra={}, path=" + ".join(str(r.path) for r in recordings))
+    return rec, np.array(starts), np.concatenate(t_rel), np.concatenate(fold)
 
 
 class Evaluator:
@@ -133,64 +182,115 @@ class Fit:
     params: dict
     names: list[str]
     cost: float
+    std: dict = field(default_factory=dict)  # Laplace posterior std of each fitted parameter
 
 
 @dataclass
-class Finding:
+class Hypothesis:
+    """One effect tried in one round of the selection: its fit and evidence."""
     effect: Effect
     params_before: dict
     params_after: dict
     fitted: list[str]
     gain: HeldOutGain
     delta_bic: float
-    runner_up: tuple[str, float] | None
     orders: list[Order] = field(default_factory=list)
-    confidence: float = 0.0
     worst_channel_ratio: float = 1.0  # largest held-out MSE after/before over the effect's channels
+    p_raw: float = 1.0
+    p_value: float = 1.0  # Benjamini-Hochberg adjusted over the round
+
+    def accepted(self) -> bool:
+        folds_better = np.mean(self.gain.fold_gains > 0)
+        return (self.p_value <= FALSE_DISCOVERY_RATE and self.gain.gain > 0.003 and self.gain.z > 3.0
+                and self.delta_bic < -10.0 and folds_better >= 0.7 and self.worst_channel_ratio <= 1.0)
+
+
+@dataclass
+class Finding:
+    """An accepted hypothesis ("added"), a look-alike set ("ambiguous"), or a
+    calibrated effect beyond its tolerance ("resized")."""
+    effect: Effect
+    kind: str
+    params_before: dict
+    params_after: dict
+    fitted: list[str]
+    p_value: float
+    confidence: float
+    hypothesis: Hypothesis | None = None      # the test behind an added / ambiguous finding
+    alternatives: list[Hypothesis] = field(default_factory=list)  # its look-alikes, for "ambiguous"
+    runner_up: Hypothesis | None = None
+    resized: list[Calibrated] = field(default_factory=list)
+
+    @property
+    def orders(self) -> list[Order]:
+        return self.hypothesis.orders if self.hypothesis else []
+
+
+@dataclass
+class DiagnosisResult:
+    """What a diagnosis found, for findings.py and report.py to read."""
+    engine: "Diagnosis"               # residuals and signals, for figures and figures of merit
+    nominal: dict
+    calibrated_params: dict           # after calibration, before any finding
+    params: dict                      # the corrected set
+    findings: list[Finding]
+    calibration: dict[str, Calibrated]
+    tested: list[list[dict]]
+    not_testable: list[dict]
+    sigma: dict[str, float]
+    located: list[dict] = field(default_factory=list)
+    unexplained: list[dict] = field(default_factory=list)
+
+    @property
+    def beyond_tolerance(self) -> list[Calibrated]:
+        return [c for c in self.calibration.values() if c.beyond_tolerance]
 
 
 class Diagnosis:
-    """Runs the diagnosis of one recording against a nominal parameter set."""
+    """Runs the diagnosis of one or several recordings of a joint against a nominal parameter set."""
 
-    def __init__(self, rec: Recording, nominal: dict[str, float], progress: Callable[[str], None] | None = None):
-        check_recording(rec)
-        self.source = rec  # the whole recording; `rec` is what is analysed
-        self.rec, starts = sample_windows(rec, ANALYSED_SECONDS, FOLDS)
+    def __init__(self, rec: Recording | list[Recording], nominal: dict[str, float],
+                 progress: Callable[[str], None] | None = None, tolerance: dict[str, float] | None = None):
+        recordings = list(rec) if isinstance(rec, (list, tuple)) else [rec]
+        for r in recordings:
+            check_recording(r)
+        self.source = recordings[0]  # the first recording whole; `rec` is what is analysed
+        self.recordings = recordings
+        self.rec, starts, t_rel, self.fold = joined(recordings)
         rec = self.rec
         self.nominal = dict(nominal)
+        self.tolerance = dict(tolerance or {})
         self.say = progress or (lambda message: None)
         self.started = _time.perf_counter()
-        if len(starts) > 1:
-            self.say(f"analysing {FOLDS} windows spread over the {self.source.duration:.0f} s recording, "
-                     f"{ANALYSED_SECONDS:.0f} s in all")
-        self.prep = Prepared(rec, kinematics(rec, starts=starts), rec.time - self.source.time[0], starts)
+        if len(starts) > len(recordings):
+            self.say(f"analysing {len(starts)} windows spread over the recordings, {ANALYSED_SECONDS:.0f} s in all")
+        self.prep = Prepared(rec, kinematics(rec, starts=starts), t_rel, starts)
         self.has_sensor = rec.tau_sensor is not None
         self.channels = channels_for(self.has_sensor)
         self.eval = Evaluator(self.prep, self.channels)
-        n = len(rec)
-        # The folds: contiguous blocks, or the sampled windows themselves.
-        self.fold = make_folds(n, FOLDS) if len(starts) == 1 else window_labels(n, starts)
         # Samples where the smoothing filter runs off a window's ends take no part.
         self.train = (self.fold % 2 == 0) & self.prep.kin.valid
         self.test = (self.fold % 2 == 1) & self.prep.kin.valid
         self.used = self.train | self.test
-        stride = max(1, int(np.count_nonzero(self.train) // FIT_SAMPLES))
-        self.fit_index = np.flatnonzero(self.train)[::stride]
+        self.stride = max(1, int(np.count_nonzero(self.train) // FIT_SAMPLES))
+        self.fit_index = np.flatnonzero(self.train)[::self.stride]
         self.sigma = {c.name: 1.0 for c in self.channels}
-        self.findings: list[Finding] = []
+        # Fit samples per independent one: the data's weight against the priors.
+        self.data_weight = 1.0
+        self.priors: dict[str, Prior] = {}
+        self.calibrated_names: list[str] = []
+        self._added_names: list[str] = []  # parameters of accepted findings
         self.not_testable: list[dict] = []
-        self.calibration: dict[str, tuple[float, float]] = {}
-        self.a0_shift = 0.0
-        self.tested: list[dict] = []  # every hypothesis tried, per round (evidence for the report)
+        self.tested: list[list[dict]] = []  # every hypothesis tried, per round (evidence for the report)
 
     def shown_residual(self, channel: Channel, p: dict) -> np.ndarray:
         """The residual for figures and figures of merit: NaN where no test looks."""
         return np.where(self.used, self.eval.residual(channel, p), np.nan)
 
-    # ---- fitting -------------------------------------------------------------
-    def _channels_of(self, part: str) -> list[Channel]:
+    def channels_of(self, part: str) -> list[Channel]:
         return [c for c in self.channels if part in c.parts()]
 
+    # ---- fitting -------------------------------------------------------------
     def _normalised(self, p, channels, index=None) -> np.ndarray:
         out = []
         for c in channels:
@@ -206,50 +306,37 @@ class Diagnosis:
             total += np.where(np.isfinite(r), r * r, 1e6)
         return total
 
-    def _bounds(self, name: str, value: float, calibrating: bool) -> tuple[float, float]:
-        info = parameters.table()[name]
-        lo, hi = info.min, info.max
-        if calibrating:
-            if name == "a0":
-                lo, hi = value - 0.05 + self.a0_shift, value + 0.05 + self.a0_shift
-            elif name in KINEMATIC_EQ7 or name.endswith(("_a", "_b")):
-                lo, hi = value - 1e-3, value + 1e-3
-            elif value > 0:
-                lo, hi = 0.7 * value, 1.3 * value
-            elif value < 0:
-                lo, hi = 1.3 * value, 0.7 * value
-        return max(lo, info.min), min(hi, info.max)
-
-    def fit(self, p: dict, names: list[str], channels: list[Channel], calibrating: set[str],
-            starts: tuple[dict, ...] = ({},)) -> Fit:
-        """Least squares over `names` on the training sample: a few iterations
-        from each start, then the best of them to convergence."""
+    def fit(self, p: dict, names: list[str], channels: list[Channel], starts: tuple[dict, ...] = ({},)) -> Fit:
+        """MAP fit over `names` on the training sample (the priors of those in
+        self.priors, the physical range for all): a few iterations from each
+        start, then the best of them to convergence."""
         full = 60 * (len(names) + 1)
         if len(starts) == 1:
-            return self._least_squares(dict(p, **starts[0]), names, channels, calibrating, full)
-        tries = [self._least_squares(dict(p, **start), names, channels, calibrating, 5) for start in starts]
+            return self._least_squares(dict(p, **starts[0]), names, channels, full)
+        tries = [self._least_squares(dict(p, **start), names, channels, 5) for start in starts]
         best = min(tries, key=lambda f: f.cost)
         if not np.isfinite(best.cost):
             return best
-        return self._least_squares(best.params, names, channels, calibrating, full)
+        return self._least_squares(best.params, names, channels, full)
 
-    def _least_squares(self, x0_params: dict, names: list[str], channels: list[Channel],
-                       calibrating: set[str], max_nfev: int) -> Fit:
-        """One bounded trust-region fit from x0_params; bounds of calibrated
-        parameters are taken around their nominal values."""
+    def _least_squares(self, x0_params: dict, names: list[str], channels: list[Channel], max_nfev: int) -> Fit:
+        table = parameters.table()
         x0 = np.array([x0_params[n] for n in names], float)
-        bounds = [self._bounds(n, self.nominal.get(n, x0_params[n]) if n in calibrating else x0_params[n],
-                               n in calibrating) for n in names]
-        lo = np.array([b[0] for b in bounds])
-        hi = np.array([b[1] for b in bounds])
+        lo = np.array([table[n].min for n in names])
+        hi = np.array([table[n].max for n in names])
         x0 = np.clip(x0, lo, hi)
-        scale = np.maximum(np.abs(x0), np.maximum((hi - lo) * 1e-3, 1e-12))
-        scale = np.where(np.isfinite(scale), scale, 1.0)
+        prior_std = np.array([self.priors[n].std if n in self.priors else np.nan for n in names])
+        scale = np.where(np.isfinite(prior_std), prior_std, np.maximum(np.abs(x0), 1e-12))
+        scale = np.maximum(scale, 1e-12)
+        with_prior = np.flatnonzero(np.isfinite(prior_std))
+        centre = np.array([self.priors[names[i]].centre for i in with_prior])
+        weight = math.sqrt(self.data_weight)
 
         def residuals(z):
             trial = dict(x0_params)
             trial.update(zip(names, z * scale))
-            return self._normalised(trial, channels, self.fit_index)
+            data = self._normalised(trial, channels, self.fit_index) * weight
+            return np.concatenate([data, (z[with_prior] * scale[with_prior] - centre) / prior_std[with_prior]])
 
         try:
             # max_nfev counts steps (scipy does not count the finite-difference Jacobian's calls).
@@ -259,7 +346,8 @@ class Diagnosis:
             return Fit(dict(x0_params), list(names), float("inf"))
         fitted = dict(x0_params)
         fitted.update(zip(names, sol.x * scale))
-        return Fit(fitted, list(names), float(sol.cost))
+        std = dict(zip(names, posterior_std(sol.jac, scale)))
+        return Fit(fitted, list(names), float(sol.cost), std)
 
     # ---- the steps -------------------------------------------------------------
     def reference_torque(self, p) -> np.ndarray:
@@ -274,69 +362,48 @@ class Diagnosis:
         cf, kf = p["Cf"], p["Kf"]
         ref_torsion = np.arctan(cf * ref) / (cf * kf) if cf > 1e-12 else ref / kf
         shift = float(np.nanmedian(est["dtheta_f"] - ref_torsion))
-        self.a0_shift = shift
         return dict(p, a0=p["a0"] + shift)
 
-    def calibrate(self) -> dict:
-        self.say("calibrating the nominal model's parameters")
+    def _update_noise(self, p) -> None:
+        """Noise scales per channel (they equalise the channels: smoothed ones
+        have no white floor), and the data's weight: one over the number of
+        fit samples per independent sample, from the residual's correlation."""
+        for c in self.channels:
+            used = self.eval.residual(c, p)[self.used]
+            self.sigma[c.name] = max(float(np.sqrt(np.nanmean(used * used))), 1e-9)
+        self.data_weight = min(1.0, self.stride / self._correlation_length(p))
+
+    def calibrate(self) -> tuple[dict, Fit]:
+        self.say("calibrating the nominal model's parameters (maximum a posteriori)")
         p = self.initial_offset(self.nominal)
-        names, calibrating = [], set()
+        names = []
         for part in ("transmission", "motor", "link"):
-            if not self._channels_of(part):
-                continue
-            for n in calibrated_parameters(part, self.nominal, self.has_sensor):
-                if n not in names:
-                    names.append(n)
-        calibrating.update(names)
+            if self.channels_of(part):
+                names += [n for n in calibrated_parameters(part, self.nominal, self.has_sensor) if n not in names]
+        self.priors = priors(names, self.nominal, self.tolerance, centres={"a0": p["a0"]})
+        self.calibrated_names = names
+        self._update_noise(p)
         # Two passes: the noise scales come from the first pass's residuals.
         for _ in range(2):
-            fit = self.fit(p, names, self.channels, calibrating)
+            fit = self.fit(p, names, self.channels)
             p = fit.params
-            for c in self.channels:
-                # Weights equalise the channels' residual levels: smoothed
-                # channels have no white floor that differences would reveal.
-                r = self.eval.residual(c, p)
-                used = r[self.used]
-                self.sigma[c.name] = max(float(np.sqrt(np.nanmean(used * used))), 1e-9)
-        self.calibration = {n: (self.nominal.get(n, parameters.table()[n].default), p[n]) for n in names}
-        self.calibrated_names = names
-        return p
+            self._update_noise(p)
+        return p, fit
 
-    def _order_candidates(self, p, part: str, channel: Channel) -> list[Order]:
-        rec = self.rec
+    def order_search(self, p, part: str, channel: Channel, angles: tuple[str, ...]) -> list[Order]:
+        """Orders of `angles` the residual of `channel` carries, strongest first
+        (orders the nominal model already has at that angle excluded)."""
         r = self.eval.residual(channel, p)
-        travel_m, travel_l = np.ptp(rec.theta_m), np.ptp(rec.theta_l)
-        found = []
-        motor_orders = [k / 2 for k in range(1, 25) if k / 2 * travel_m >= 3 * np.pi]
-        exclude_m = (p["omega_w"], 2 * p["omega_w"]) if part == "transmission" else ()
         smoothed = self.prep.kin.smooth if part in SMOOTHED_PARTS else None
-        found += order_search(rec.theta_m, r, self.fold, self.train, self.test, motor_orders, exclude_m, "theta_m",
-                              through=smoothed)
-        if part == "transmission":
-            link_orders = [k for k in range(1, 41) if k * travel_l >= 3 * np.pi]
-            found += order_search(rec.theta_l, r, self.fold, self.train, self.test, link_orders, (p["omega_l"],),
-                                  "theta_l")
+        existing = {"theta_m": (p["omega_w"], 2 * p["omega_w"]), "theta_l": (p["omega_l"],)} \
+            if part == "transmission" else {}
+        found = []
+        for angle in angles:
+            values = getattr(self.rec, angle)
+            found += order_search(values, r, self.fold, self.train, self.test,
+                                  candidate_orders(angle, np.ptp(values)), existing.get(angle, ()), angle,
+                                  through=smoothed if angle == "theta_m" else None)
         return found
-
-    def _candidate_params(self, effect: Effect, p: dict, channel: Channel):
-        """Parameters to fit for `effect` (and the orders that define them)."""
-        if effect.id == "kinematic_error":
-            orders = self._order_candidates(p, "transmission", channel)
-            slots = {"theta_m": ["ke_m1", "ke_m2"], "theta_l": ["ke_l1", "ke_l2"]}
-            trial, names = dict(p), []
-            for o in orders:
-                if not slots[o.angle]:
-                    continue
-                slot = slots[o.angle].pop(0)
-                trial[f"{slot}_order"] = o.order
-                names += [f"{slot}_a", f"{slot}_b"]
-            return trial, names, orders
-        if effect.id == "cogging":
-            orders = [o for o in self._order_candidates(p, "motor", channel) if o.angle == "theta_m"][:1]
-            if not orders:
-                return p, [], []
-            return dict(p, cog_order=orders[0].order), ["cog_a", "cog_b"], orders
-        return p, list(effect.params), []
 
     def _anchors(self, part: str, stateful: bool = False) -> list[str]:
         """The calibrated parameters of `part`, refitted with every hypothesis
@@ -344,17 +411,17 @@ class Diagnosis:
         missing effect (a viscous term leaks into Kt and Fc), and a hypothesis
         judged against that absorption alone helps some folds and hurts the rest."""
         own = ALWAYS_CALIBRATED[part] if stateful else calibrated_parameters(part, self.nominal, self.has_sensor)
-        # The eq. (7) terms are orthogonal to every other effect (they live at
-        # their own angle orders): left out, they make each fit much cheaper.
-        return [n for n in self.calibrated_names if n in own and n not in KINEMATIC_EQ7]
+        # Terms at their own angle orders are orthogonal to every other
+        # effect: left out, they make each fit much cheaper.
+        skip = orthogonal_parameters()
+        return [n for n in self.calibrated_names if n in own and n not in skip]
 
-    def _n_eff(self, p) -> float:
-        """Training samples divided by the residual's correlation length."""
-        c = self.channels[0]
-        r = self.eval.residual(c, p)[self.train]
+    def _correlation_length(self, p) -> int:
+        """Samples over which the residual stays correlated (1/e), at most the smoothing window."""
+        r = self.eval.residual(self.channels[0], p)[self.train]
         r = r[np.isfinite(r)] - np.nanmean(r)
         if len(r) < 10:
-            return 1.0
+            return 1
         spectrum = np.fft.rfft(r, 2 * len(r))
         acf = np.fft.irfft(spectrum * np.conj(spectrum))[: min(len(r), 2000)]
         acf /= acf[0]
@@ -362,18 +429,32 @@ class Diagnosis:
         length = int(below[0]) if len(below) else 2000
         # Slow structure (the very thing being tested) lengthens the
         # correlation; the noise itself is correlated only over the smoothing window.
-        return len(r) / max(1, min(length, self.prep.kin.smooth.window))
+        return max(1, min(length, self.prep.kin.smooth.window))
 
-    def _try(self, effect: Effect, p: dict) -> Finding | None:
-        channels = self._channels_of(effect.part)
+    def _jacobian(self, p: dict, names: list[str], channels: list[Channel]) -> np.ndarray:
+        """(channel, sample, parameter) derivative of the normalised residuals, by forward differences."""
+        base = np.stack([np.nan_to_num(self.eval.residual(c, p) / self.sigma[c.name]) for c in channels])
+        columns = []
+        for n in names:
+            h = 1e-4 * max(abs(p[n]), self.priors[n].std if n in self.priors else 1e-9, 1e-12)
+            if p[n] + h > parameters.table()[n].max:
+                h = -h  # at the top of its range: a backward difference
+            shifted = np.stack([np.nan_to_num(self.eval.residual(c, dict(p, **{n: p[n] + h})) / self.sigma[c.name])
+                                for c in channels])
+            columns.append((shifted - base) / h)
+        return np.where(self.used[None, :, None], np.stack(columns, axis=2), 0.0)
+
+    def _try(self, effect: Effect, p: dict) -> Hypothesis | None:
+        channels = self.channels_of(effect.part)
         if not channels:
             return None
-        trial, names, orders = self._candidate_params(effect, p, channels[0])
+        trial, names, orders = effect.candidates(
+            effect, p, lambda q, angles: self.order_search(q, effect.part, channels[0], angles))
         if not names:
             return None
         anchors = self._anchors(effect.part, effect.stateful)
         names_all = names + [a for a in anchors if a not in names]
-        fit = self.fit(trial, names_all, channels, set(anchors), effect.starts or ({},))
+        fit = self.fit(trial, names_all, channels, effect.starts or ({},))
         per_before = [self._squared(p, [c]) for c in channels]
         per_after = [self._squared(fit.params, [c]) for c in channels]
         before, after = sum(per_before), sum(per_after)
@@ -382,89 +463,155 @@ class Diagnosis:
         # make another view of the same joint worse.
         worst = max(float(np.nanmean(a[self.test]) / max(np.nanmean(b[self.test]), 1e-300))
                     for b, a in zip(per_before, per_after))
-        n_eff = self._n_eff(p)
+        n_eff = np.count_nonzero(self.train) / self._correlation_length(p)
         mse_b, mse_a = np.mean(before[self.train]), np.mean(after[self.train])
         dbic = n_eff * math.log(max(mse_a, 1e-300) / max(mse_b, 1e-300)) + len(names) * math.log(n_eff)
-        return Finding(effect, p, fit.params, names, gain, float(dbic), None, orders, worst_channel_ratio=worst)
+        hypothesis = Hypothesis(effect, p, fit.params, names, gain, float(dbic), orders, worst_channel_ratio=worst)
+        # The simulated null: the same test on noise with the residual's colour,
+        # the hypothesis linearised at its fit.
+        rows = [self.channels.index(c) for c in channels]
+        jac = self._jacobian(fit.params, names_all, channels)
+        z_null = null_z(self._noise.replicates(rows), jac, self.fit_index, self.fold, self.test)
+        hypothesis.p_raw = p_value(gain.z, z_null)
+        return hypothesis
 
-    def select(self, p: dict) -> dict:
-        candidates = []
+    def _null_noise(self, p) -> NullNoise:
+        return NullNoise(np.stack([np.where(self.used, np.nan_to_num(self.eval.residual(c, p) / self.sigma[c.name]),
+                                            0.0) for c in self.channels]))
+
+    def candidates(self, p: dict) -> list[Effect]:
+        """Effects the nominal set lacks that this recording can test."""
+        out = []
         known = parameters.table()
         for effect in EFFECTS.values():
-            if not self._channels_of(effect.part) or effect.is_on(self.nominal):
+            if not self.channels_of(effect.part) or effect.is_on(self.nominal):
                 continue
-            needed = effect.params or {"kinematic_error": ("ke_m1_a",), "cogging": ("cog_a",)}[effect.id]
-            if any(n not in known for n in needed):
+            if any(n not in known for n in effect.carries()):
                 continue  # this build of the model has no terms for it
             why = testable(effect, self.prep, self.reference_torque(p))
             if why:
                 self.not_testable.append({"effect": effect.id, "reason": f"not testable on this recording: {why}"})
                 continue
-            candidates.append(effect)
+            out.append(effect)
+        return out
+
+    def select(self, p: dict) -> tuple[dict, list[Finding]]:
+        candidates = self.candidates(p)
+        findings: list[Finding] = []
         while candidates:
             self.say(f"testing {len(candidates)} hypotheses ({', '.join(e.id for e in candidates)})")
-            tried = [f for f in (self._try(e, p) for e in candidates) if f is not None]
-            tried.sort(key=lambda f: -f.gain.gain)
-            self.tested.append([{"effect": f.effect.id, "held_out_gain": round(f.gain.gain, 5),
-                                 "z": round(f.gain.z, 2), "delta_bic": round(f.delta_bic, 1),
-                                 "accepted": _accept(f)} for f in tried])
-            accepted = [f for f in tried if _accept(f)]
+            self._noise = self._null_noise(p)
+            tried = [h for h in (self._try(e, p) for e in candidates) if h is not None]
+            for h, adjusted in zip(tried, benjamini_hochberg([h.p_raw for h in tried])):
+                h.p_value = adjusted
+            tried.sort(key=lambda h: -h.gain.gain)
+            self.tested.append([{"effect": h.effect.id, "held_out_gain": round(h.gain.gain, 5),
+                                 "z": round(h.gain.z, 2), "p_value": h.p_value, "delta_bic": round(h.delta_bic, 1),
+                                 "accepted": h.accepted()} for h in tried])
+            accepted = [h for h in tried if h.accepted()]
             if not accepted:
                 break
             best = accepted[0]
-            others = [f for f in tried if f is not best]
-            best.runner_up = (others[0].effect.id, others[0].gain.gain) if others else None
-            best.confidence = _confidence(best, others)
-            self.say(f"found {best.effect.id}: held-out gain {100 * best.gain.gain:.1f} %, z = {best.gain.z:.1f}")
+            others = [h for h in tried if h is not best]
+            finding = _finding_for(best, others)
+            self.say(f"found {finding.effect.id} ({finding.kind}): held-out gain {100 * best.gain.gain:.1f} %, "
+                     f"p = {best.p_value:.2g}")
             # Refit everything so calibration and the new terms settle together.
-            names = self.calibrated_names + [n for f in self.findings + [best] for n in f.fitted]
-            names = list(dict.fromkeys(names))
-            refit = self.fit(best.params_after, names, self.channels, set(self.calibrated_names))
-            best.params_after = refit.params
-            self.findings.append(best)
+            names = self.calibrated_names + [n for f in findings + [finding] for n in f.fitted]
+            refit = self.fit(best.params_after, list(dict.fromkeys(names)), self.channels)
+            finding.params_after = refit.params
+            findings.append(finding)
+            self._added_names = list(dict.fromkeys(self._added_names + finding.fitted))
+            self.last_fit = refit
             p = refit.params
-            candidates = [e for e in candidates if e is not best.effect]
-        return p
+            lookalike_ids = {a.effect.id for a in finding.alternatives}
+            candidates = [e for e in candidates if e is not best.effect and e.id not in lookalike_ids]
+        return p, findings
+
+    def calibration_of(self, fit: Fit, p: dict) -> dict[str, Calibrated]:
+        return {n: Calibrated(n, self.nominal.get(n, parameters.table()[n].default), p[n],
+                              fit.std.get(n, self.priors[n].std), self.priors[n]) for n in self.calibrated_names}
+
+    def resized(self, calibration: dict[str, Calibrated], p: dict) -> list[Finding]:
+        """Effects of the nominal model with a parameter beyond its tolerance,
+        and needed there: held at the edge of its tolerance (the rest refitted),
+        the model must predict held-out data significantly worse. A parameter
+        that only wandered along a look-alike's direction (bl1 against a0 and
+        Kf on a short link travel) costs nothing held out and is not a finding.
+        The held fit starts at the edge of the band (RESIZE_Z tolerances)."""
+        moved: dict[str, list[Calibrated]] = {}
+        for c in calibration.values():
+            effect = owner(c.name)
+            if effect is not None and c.beyond_tolerance:
+                moved.setdefault(effect.id, []).append(c)
+        out = []
+        for effect_id, params in moved.items():
+            edge = {c.name: c.prior.centre + math.copysign(RESIZE_Z * c.prior.std, c.z) for c in params}
+            free = [n for n in self.calibrated_names + self._added_names if n not in edge]
+            # Both fits from the same start and by the same steps: only the held parameters differ.
+            held = self.fit(dict(p, **edge), free, self.channels)
+            unheld = self.fit(p, free + list(edge), self.channels)
+            gain = held_out_gain_sq(self._squared(held.params, self.channels),
+                                    self._squared(unheld.params, self.channels), self.fold, self.test)
+            p_value = float(norm.sf(gain.z))
+            self.say(f"{effect_id}: {', '.join(edge)} beyond tolerance; held to it, held-out gain "
+                     f"{100 * gain.gain:.2f} % (z = {gain.z:.1f})")
+            if gain.gain > 0.003 and p_value <= FALSE_DISCOVERY_RATE / max(1, len(moved)) and gain.z > 3.0:
+                out.append(Finding(EFFECTS[effect_id], "resized", held.params, p, [c.name for c in params],
+                                   p_value, round(float(norm.cdf(gain.z - 2.0)), 3), resized=params))
+        return sorted(out, key=lambda f: f.p_value)
 
 
-def _accept(f: Finding) -> bool:
-    folds_better = np.mean(f.gain.fold_gains > 0)
-    return (f.gain.gain > 0.003 and f.gain.z > 3.0 and f.delta_bic < -10.0 and folds_better >= 0.7
-            and f.worst_channel_ratio <= 1.0)
+def _separated(best: Hypothesis, rival: Hypothesis) -> bool:
+    """The better hypothesis explains clearly more held-out structure than the rival, fold by fold."""
+    d = best.gain.fold_gains - rival.gain.fold_gains
+    spread = np.std(d, ddof=1) / math.sqrt(len(d)) if len(d) > 1 else np.inf
+    clearly = spread > 0 and np.mean(d) / spread > SEPARATED_Z
+    return bool(clearly and rival.gain.gain <= SEPARATED_RATIO * best.gain.gain)
 
 
-def _confidence(best: Finding, others: list[Finding]) -> float:
-    """Significance of the held-out gain, discounted when a look-alike explains almost as much."""
-    c = float(norm.cdf(best.gain.z - 2.0))
-    rivals = [o for o in others if o.effect.id in best.effect.lookalikes and o.gain.gain > 0]
-    if rivals:
-        margin = 1.0 - max(o.gain.gain for o in rivals) / best.gain.gain
-        c *= min(1.0, 0.5 + margin)
-    return round(c, 3)
+def _finding_for(best: Hypothesis, others: list[Hypothesis]) -> Finding:
+    """An added finding, or an ambiguous one when a look-alike explains the same
+    structure and is significant on its own."""
+    rivals = [o for o in others if o.accepted() and (o.effect.id in best.effect.lookalikes
+                                                      or best.effect.id in o.effect.lookalikes)
+              and not _separated(best, o)]
+    runner_up = others[0] if others else None
+    confidence = float(norm.cdf(best.gain.z - 2.0)) * (1.0 - best.p_value)
+    if not rivals:
+        return Finding(best.effect, "added", best.params_before, best.params_after, best.fitted, best.p_value,
+                       round(confidence, 3), best, runner_up=runner_up)
+    share = best.gain.gain / (best.gain.gain + sum(r.gain.gain for r in rivals))
+    return Finding(best.effect, "ambiguous", best.params_before, best.params_after, best.fitted, best.p_value,
+                   round(confidence * share, 3), best, alternatives=rivals, runner_up=runner_up)
 
 
-def diagnose(rec: Recording, nominal: dict[str, float], progress: Callable[[str], None] | None = None):
-    """Run every step; returns (the Diagnosis, the findings document)."""
+def diagnose(rec: Recording | list[Recording], nominal: dict[str, float],
+             progress: Callable[[str], None] | None = None, tolerance: dict[str, float] | None = None):
+    """Run every step on one recording or several of the same joint (fitted
+    jointly); returns (the DiagnosisResult, the findings document)."""
     # The linear algebra here is tall and thin (thousands of samples by a
     # dozen parameters): one BLAS thread is faster than several fighting
     # over two cores, by up to 7x measured on this machine under load.
     with threadpool_limits(limits=1, user_api="blas"):
-        return _diagnose(rec, nominal, progress)
+        return _diagnose(rec, nominal, progress, tolerance)
 
 
-def _diagnose(rec: Recording, nominal: dict[str, float], progress: Callable[[str], None] | None):
+def _diagnose(rec, nominal, progress, tolerance):
     from .findings import document, remaining_structure
-    diag = Diagnosis(rec, nominal, progress)
-    p = diag.calibrate()
+    diag = Diagnosis(rec, nominal, progress, tolerance)
+    calibrated, diag.last_fit = diag.calibrate()
     diag.say("locating structure in the calibrated model's residuals")
-    located = remaining_structure(diag, p)
-    diag.calibrated_params = dict(p)
-    p = diag.select(p)
+    located = remaining_structure(diag, calibrated)
+    p, added = diag.select(calibrated)
+    calibration = diag.calibration_of(diag.last_fit, p)
     diag.say("checking what remains")
-    doc = document(diag, p, remaining_structure(diag, p))
+    result = DiagnosisResult(diag, dict(diag.nominal), dict(calibrated), p, added + diag.resized(calibration, p),
+                             calibration, diag.tested, diag.not_testable, dict(diag.sigma), located,
+                             remaining_structure(diag, p))
+    doc = document(result)
     if doc["unexplained"]:  # open-library fallback: propose terms for what no named effect explains
         from .open_library import propose_terms
         doc["proposed_terms"] = propose_terms(diag, p, doc["unexplained"])
-    doc["located"] = located
     doc["seconds"] = round(_time.perf_counter() - diag.started, 2)
-    return diag, doc
+    return result, doc

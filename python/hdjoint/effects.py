@@ -16,6 +16,28 @@ KINEMATIC_EQ7 = ("al1", "bl1", "aw1", "bw1", "aw2", "bw2")
 KINEMATIC_EXTRA = ("ke_m1", "ke_m2", "ke_l1", "ke_l2")  # slots: <slot>_order, <slot>_a, <slot>_b
 
 
+def _own_parameters(effect: "Effect", p: dict, search) -> tuple[dict, list[str], list]:
+    """The usual candidate: the effect's parameters, fitted from its starts."""
+    return p, list(effect.params), []
+
+
+def _slots_for_orders(effect: "Effect", p: dict, search) -> tuple[dict, list[str], list]:
+    """A candidate whose terms sit at angle orders: the order search
+    (`search(p, angles)`, strongest first) picks them, each fills a free slot
+    of the effect's `slots` (prefix -> angle): <slot>_order, <slot>_a, <slot>_b."""
+    orders = search(p, effect.order_angles)
+    free = {angle: [slot for slot, a in effect.slots if a == angle] for angle in effect.order_angles}
+    trial, names, used = dict(p), [], []
+    for o in orders:
+        if not free[o.angle]:
+            continue
+        slot = free[o.angle].pop(0)
+        trial[f"{slot}_order"] = o.order
+        names += [f"{slot}_a", f"{slot}_b"]
+        used.append(o)
+    return trial, names, used
+
+
 @dataclass(frozen=True)
 class Effect:
     id: str
@@ -27,10 +49,34 @@ class Effect:
     starts: tuple[dict, ...] = ()  # starting values for fits (grids over nonlinear parameters)
     needs: str = ""               # excitation it needs (checked by `testable`)
     lookalikes: tuple[str, ...] = field(default=())
+    revealed_by: str = ""         # the excitation that shows this effect and not its look-alikes
     # Its state runs through time, so every fit evaluation simulates the whole
     # recording: it is refitted with the part's always-calibrated parameters
     # only, not with everything calibration touched (2.5x fewer evaluations).
     stateful: bool = False
+    # Shape parameters of the law, calibrated (not hypothesised) when the nominal set has the effect on.
+    shape: tuple[str, ...] = ()
+    # Parameters the nominal model may already carry for this effect: a
+    # calibration that moves one beyond its tolerance is a "resized" finding of it.
+    resizes: tuple[str, ...] = ()
+    # Effects whose terms sit at angle orders: the angles searched and the slots filled.
+    order_angles: tuple[str, ...] = ()
+    slots: tuple[tuple[str, str], ...] = ()
+    # (effect, p, order search) -> (trial parameters, names to fit, orders used)
+    candidates: Callable = _own_parameters
+
+    def carries(self) -> tuple[str, ...]:
+        """Every model parameter of this effect (for checking the build has them)."""
+        slot_terms = tuple(f"{slot}_{k}" for slot, _ in self.slots for k in ("order", "a", "b"))
+        return tuple(dict.fromkeys(self.params + self.shape + self.resizes + slot_terms))
+
+    def calibrates(self, nominal: dict) -> tuple[str, ...]:
+        """Parameters of this effect to calibrate on a nominal set: its own when it is on, and
+        any order slot the nominal set fills."""
+        names = self.params + self.shape if self.is_on(nominal) else ()
+        filled = tuple(f"{slot}_{k}" for slot, _ in self.slots for k in ("a", "b")
+                       if nominal.get(f"{slot}_a", 0.0) or nominal.get(f"{slot}_b", 0.0))
+        return tuple(dict.fromkeys(names + filled))
 
 
 def _nonzero(*names):
@@ -41,61 +87,88 @@ EFFECTS: dict[str, Effect] = {e.id: e for e in [
     Effect("kinematic_error", "transmission", (),  # slots are chosen by the order search
            "kinematic error (gear-meshing transmission error) at orders of the motor or link angle beyond eq. (7)",
            "extra Fourier terms of theta_m and theta_l in theta_err (ke_m1/ke_m2/ke_l1/ke_l2)",
-           lambda p: False, needs="angle", lookalikes=("cogging",)),
+           lambda p: False, needs="angle", lookalikes=("cogging",),
+           revealed_by="a slow sweep of the motor over many revolutions at constant, low load",
+           resizes=KINEMATIC_EQ7, order_angles=("theta_m", "theta_l"),
+           slots=(("ke_m1", "theta_m"), ("ke_m2", "theta_m"), ("ke_l1", "theta_l"), ("ke_l2", "theta_l")),
+           candidates=_slots_for_orders),
     Effect("wave_generator_compliance", "transmission", ("Kw", "Cw"),
            "wave generator (bearing and plug) compliance, eq. (4)", "wg(tau) with Kw, Cw",
            lambda p: p.get("Kw", 1e9) < 1e8, starts=({"Kw": 3.0, "Cw": 0.0}, {"Kw": 10.0, "Cw": 10.0},
                                                     {"Kw": 30.0, "Cw": 30.0}),
-           needs="torque", lookalikes=("stiffness_nonlinearity", "backlash")),
+           needs="torque", lookalikes=("stiffness_nonlinearity", "backlash"),
+           revealed_by="fast motor accelerations at low load (the wave generator twists with the motor-side "
+                       "torque, the flexspline with the link torque)",
+           resizes=("Kw", "Cw")),
     Effect("wave_generator_load", "transmission", ("wg_load",),
            "the wave generator is loaded by the transmitted torque tau/N, not by the motor current Kt*i_m "
            "(the paper's approximation carries friction and inertia into the wave generator's torsion)",
            "wave generator torque (1 - wg_load)*Kt*i_m + wg_load*tau/N",
            _nonzero("wg_load"), starts=({"wg_load": 1.0}, {"wg_load": 0.5}), needs="speed_reversals",
-           lookalikes=("coulomb_friction", "wave_generator_compliance")),
+           lookalikes=("coulomb_friction", "wave_generator_compliance", "hysteresis", "backlash"),
+           revealed_by="speed reversals at constant load (friction flips, the transmitted torque does not)",
+           resizes=("wg_load",)),
     Effect("stiffness_nonlinearity", "transmission", ("Cf",),
            "flexspline stiffening with torque (the catalogue's K1 -> K3)", "atan law of eq. (5) with Cf",
            _nonzero("Cf"), starts=({"Cf": 0.03}, {"Cf": 0.08}, {"Cf": 0.2}), needs="torque",
-           lookalikes=("wave_generator_compliance",)),
+           lookalikes=("wave_generator_compliance",),
+           revealed_by="a wider torque range at slow motion (slow ramps of the load up to the rated torque)",
+           resizes=("Cf", "Kf")),
     Effect("hysteresis", "transmission", ("hys_H", "hys_sigma"),
            "hysteresis of the flexspline: torque depends on the direction of loading (a rate-independent loop)",
            "Dahl hysteresis torque added to the elastic torque (hys_H, hys_sigma)",
            _nonzero("hys_H"), starts=({"hys_H": 0.1, "hys_sigma": 5e3}, {"hys_H": 0.3, "hys_sigma": 3e4},
                                       {"hys_H": 0.8, "hys_sigma": 1e5}),
-           needs="torque_reversals", lookalikes=("backlash", "coulomb_friction"), stateful=True),
+           needs="torque_reversals", lookalikes=("backlash", "coulomb_friction", "wave_generator_load"),
+           revealed_by="slow load reversals of several amplitudes (a loop that grows with amplitude)",
+           stateful=True, resizes=("hys_H", "hys_sigma")),
     Effect("backlash", "transmission", ("backlash",),
            "lost motion: a dead zone of torsion around zero torque", "dead zone of width `backlash` on the torsion",
            _nonzero("backlash"), starts=({"backlash": 1e-5}, {"backlash": 4e-5}, {"backlash": 1.5e-4}),
-           needs="torque_reversals", lookalikes=("hysteresis", "wave_generator_compliance")),
+           needs="torque_reversals", lookalikes=("hysteresis", "wave_generator_compliance", "wave_generator_load"),
+           revealed_by="a dwell at zero load between slow reversals (a flat of torsion without torque)",
+           resizes=("backlash",)),
     Effect("coulomb_friction", "motor", ("Fc",),
            "Coulomb friction of motor and wave generator", "tau_fm = Fc*tanh(omega_m/omega_fc)",
            _nonzero("Fc"), starts=({"Fc": 0.005}, {"Fc": 0.02}), needs="speed_reversals",
-           lookalikes=("hysteresis", "stribeck_friction")),
+           lookalikes=("hysteresis", "stribeck_friction", "wave_generator_load"),
+           revealed_by="constant-speed runs in both directions at several speeds",
+           shape=("omega_fc",), resizes=("Fc", "omega_fc")),
     Effect("stribeck_friction", "motor", ("Fs", "omega_s"),
            "Stribeck friction: higher friction at low speed", "(Fc + Fs*exp(-(omega/omega_s)^2))*tanh(...)",
            _nonzero("Fs"), starts=({"Fs": 0.005, "omega_s": 3.0}, {"Fs": 0.01, "omega_s": 15.0},
                                    {"Fs": 0.02, "omega_s": 50.0}),
-           needs="low_speed", lookalikes=("coulomb_friction",)),
+           needs="low_speed", lookalikes=("coulomb_friction",),
+           revealed_by="slow constant speeds (0.5-20 rad/s) held in both directions, not only passed through",
+           resizes=("Fs", "omega_s")),
     Effect("viscous_friction", "motor", ("Bm",),
            "viscous friction proportional to motor speed", "Bm*omega_m", _nonzero("Bm"),
-           starts=({"Bm": 2e-5}, {"Bm": 1e-4}), needs="speed", lookalikes=("time_delay",)),
+           starts=({"Bm": 2e-5}, {"Bm": 1e-4}), needs="speed", lookalikes=("time_delay",),
+           revealed_by="constant high speeds (no acceleration, so no delay shows)", resizes=("Bm",)),
     Effect("cogging", "motor", (),  # the order comes from the order search
            "motor cogging / torque ripple periodic in the motor angle",
            "cog_a*cos(cog_order*theta_m) + cog_b*sin(cog_order*theta_m) added to the motor torque",
-           _nonzero("cog_a", "cog_b"), needs="angle", lookalikes=("kinematic_error",)),
+           _nonzero("cog_a", "cog_b"), needs="angle", lookalikes=("kinematic_error",),
+           revealed_by="a slow motor sweep with the link blocked or unloaded (ripple in the current, not the torsion)",
+           resizes=("cog_a", "cog_b"), order_angles=("theta_m",), slots=(("cog", "theta_m"),),
+           candidates=_slots_for_orders),
     Effect("time_delay", "motor", ("i_delay",),
            "a time delay between the current measurement and the encoders", "current realigned by i_delay",
            _nonzero("i_delay"), starts=({"i_delay": 1e-3}, {"i_delay": 3e-3}, {"i_delay": 8e-3}),
-           needs="current_dynamics", lookalikes=("viscous_friction",)),
+           needs="current_dynamics", lookalikes=("viscous_friction",),
+           revealed_by="fast current steps at standstill", resizes=("i_delay",)),
     Effect("thermal_drift", "motor", ("Fc_drift",),
            "friction changing over the run (warm-up)", "friction scaled by (1 + Fc_drift*t)",
-           _nonzero("Fc_drift"), starts=({"Fc_drift": -2e-3}, {"Fc_drift": 2e-3}), needs="duration"),
+           _nonzero("Fc_drift"), starts=({"Fc_drift": -2e-3}, {"Fc_drift": 2e-3}), needs="duration",
+           revealed_by="the same motion repeated from a cold start for several minutes", resizes=("Fc_drift",)),
     Effect("gravity_load", "link", ("mgl",),
            "gravity (or payload) torque on the link", "mgl*sin(theta_l)", _nonzero("mgl"),
-           starts=({"mgl": 1.0}, {"mgl": -1.0}), needs="link_travel"),
+           starts=({"mgl": 1.0}, {"mgl": -1.0}), needs="link_travel",
+           revealed_by="slow link motion over a wide angle", resizes=("mgl",)),
     Effect("link_friction", "link", ("Fl",),
            "friction on the link side (output bearing, seals)", "Fl*tanh(omega_l*N/omega_fc)", _nonzero("Fl"),
-           starts=({"Fl": 0.05}, {"Fl": 0.3}), needs="link_reversals"),
+           starts=({"Fl": 0.05}, {"Fl": 0.3}), needs="link_reversals",
+           revealed_by="link reversals at low motor current", resizes=("Fl",)),
 ]}
 
 # Parameters calibrated whenever their part of the model is fitted: the
@@ -109,17 +182,31 @@ ALWAYS_CALIBRATED = {
 
 
 def calibrated_parameters(part: str, nominal: dict, sensor: bool) -> list[str]:
-    """Parameters of `part` to calibrate: the always-calibrated ones plus those
-    of every effect the nominal set switches on."""
+    """Parameters of `part` to calibrate: the always-calibrated ones, the
+    shape of every effect the nominal set switches on, and every nonzero
+    parameter an effect may resize."""
     names = list(ALWAYS_CALIBRATED[part])
     if part == "motor" and not sensor:
         names.remove("Kt")  # without a torque sensor only Kt/Kf is observable: Kt is kept
-    if part == "transmission" and any(nominal.get(n, 0.0) for n in KINEMATIC_EQ7):
-        names += list(KINEMATIC_EQ7)
     for effect in EFFECTS.values():
-        if effect.part == part and effect.is_on(nominal):
-            names += [n for n in effect.params if n not in names]
+        if effect.part != part:
+            continue
+        # A term the model carries beside the effect's switch (eq. (7), Kf) is calibrated when nonzero;
+        # the effect's own parameters only when it is on (hys_sigma means nothing while hys_H = 0).
+        own = effect.params + effect.shape
+        on = [n for n in effect.resizes if nominal.get(n, 0.0) and (n not in own or effect.is_on(nominal))]
+        names += [n for n in (*effect.calibrates(nominal), *on) if n not in names]
     return names
+
+
+def owner(name: str) -> Effect | None:
+    """The effect a calibrated parameter belongs to (None: a constant of the joint, e.g. Kt)."""
+    return next((e for e in EFFECTS.values() if name in e.resizes or name in e.shape), None)
+
+
+def orthogonal_parameters() -> set[str]:
+    """Parameters of terms at their own angle orders: no other effect's fit needs them refitted."""
+    return {n for e in EFFECTS.values() if e.order_angles for n in e.resizes}
 
 
 def _reversals(x: np.ndarray, threshold: float) -> int:

@@ -1,12 +1,15 @@
-"""Turns a finished Diagnosis into the contract's findings document: where
-each mismatch is (part, time, regime, angle), its evidence, the model terms
-and parameters added, and the fit before and after."""
+"""Turns a DiagnosisResult into the contract's findings document: where
+each mismatch is (part, time, regime, angle), its kind (added, resized,
+ambiguous), its evidence and p-value, the model terms and parameters with
+their intervals, and the fit before and after."""
 from __future__ import annotations
 
 import numpy as np
 
 from . import _core, parameters
 from .metrics import error_figures
+from .calibration import INTERVAL
+from .significance import FALSE_DISCOVERY_RATE, NullNoise, benjamini_hochberg, null_z, p_value
 from .structure import scan
 
 
@@ -55,7 +58,7 @@ def regimes(diag, reference) -> dict[str, np.ndarray]:
 
 
 def where(diag, finding) -> dict:
-    channel = diag._channels_of(finding.effect.part)[0]
+    channel = diag.channels_of(finding.effect.part)[0]
     before = diag.shown_residual(channel, finding.params_before)
     after = diag.shown_residual(channel, finding.params_after)
     contribution = np.nan_to_num(before - after)
@@ -87,7 +90,7 @@ def where(diag, finding) -> dict:
 
 
 def fit_figures(diag, finding) -> dict:
-    channel = diag._channels_of(finding.effect.part)[0]
+    channel = diag.channels_of(finding.effect.part)[0]
     before = diag.shown_residual(channel, finding.params_before)
     after = diag.shown_residual(channel, finding.params_after)
     return {"channel": channel.name, "rms_before": _rms(before), "rms_after": _rms(after),
@@ -95,7 +98,12 @@ def fit_figures(diag, finding) -> dict:
 
 
 def remaining_structure(diag, p) -> list[dict]:
-    """Held-out structure left in every channel after the accepted findings."""
+    """Held-out structure left in every channel after the accepted findings:
+    binned-mean scans over regime features, each a location tested. A scan
+    large enough to matter (held-out gain > 2 %, z > 4) gets a p-value from
+    the simulated null (significance.py; the bins are its regressors);
+    Benjamini-Hochberg runs over every scan of every channel (the others
+    count with p = 1, which only makes the correction stricter)."""
     rec, kin = diag.rec, diag.prep.kin
     reference = diag.reference_torque(p)
     loading = np.sign(np.gradient(_smooth(reference, 20)))
@@ -108,13 +116,27 @@ def remaining_structure(diag, p) -> list[dict]:
         "motor angle (one revolution)": (rec.theta_m, 2 * np.pi, "rad"),
         "link angle": (rec.theta_l, None, "rad"),
     }
+    scans, p_raw = [], []
+    for row, c in enumerate(diag.channels):
+        r = np.nan_to_num(diag.shown_residual(c, p))
+        noise = None
+        for s in scan(r, features, diag.fold, diag.train, diag.test):
+            scans.append((c, s))
+            if not (s.gain.gain > 0.02 and s.gain.z > 4.0 and s.bin_index is not None):
+                p_raw.append(1.0)
+                continue
+            if noise is None:
+                noise = NullNoise(r[None, :]).replicates([0])
+            bins = np.zeros((1, len(r), int(s.bin_index.max()) + 2))
+            bins[0, np.arange(len(r)), s.bin_index] = 1.0
+            bins[0, :, -1] = 1.0  # the scan removes the training mean first
+            fit_rows = np.flatnonzero(diag.train)
+            p_raw.append(p_value(s.gain.z, null_z(noise, bins, fit_rows, diag.fold, diag.test)))
     found = []
-    for c in diag.channels:
-        r = diag.shown_residual(c, p)
-        for s in scan(np.nan_to_num(r), features, diag.fold, diag.train, diag.test):
-            if s.gain.gain > 0.02 and s.gain.z > 4.0:
-                found.append({"channel": c.name, "feature": s.feature, "held_out_gain": round(s.gain.gain, 4),
-                              "z": round(s.gain.z, 1), "largest_at": s.peak_at})
+    for (c, s), p_adj in zip(scans, benjamini_hochberg(p_raw)):
+        if s.gain.gain > 0.02 and s.gain.z > 4.0 and p_adj <= FALSE_DISCOVERY_RATE:
+            found.append({"channel": c.name, "feature": s.feature, "held_out_gain": round(s.gain.gain, 4),
+                          "z": round(s.gain.z, 1), "p_value": p_adj, "largest_at": s.peak_at})
     return found
 
 
@@ -136,48 +158,88 @@ def estimator_comparison(diag, corrected) -> dict | None:
     return out
 
 
-def document(diag, final_params: dict, unexplained: list[dict]) -> dict:
-    if diag.findings:
+def separate_by(effects) -> str:
+    """The excitation that would tell look-alike effects apart, in one sentence."""
+    return "To tell them apart, record " + "; ".join(f"{e.revealed_by} (shows {e.id})" for e in effects) + "."
+
+
+def _interval(fit_std: dict, params: dict, name: str) -> list[float] | None:
+    from scipy.stats import norm
+    std = fit_std.get(name)
+    if std is None or not np.isfinite(std):
+        return None
+    half = float(norm.ppf(0.5 + INTERVAL / 2) * std)
+    return [params[name] - half, params[name] + half]
+
+
+def _alternative(h, share: float) -> dict:
+    return {"effect": h.effect.id, "evidence_share": round(share, 3), "held_out_gain": round(h.gain.gain, 5),
+            "p_value": h.p_value, "parameters": {n: h.params_after[n] for n in _reported(h.fitted)}}
+
+
+def finding_document(result, f) -> dict:
+    diag, final_params = result.engine, result.params
+    out = {"effect": f.effect.id, "kind": f.kind, "p_value": f.p_value, "confidence": f.confidence,
+           "where": where(diag, f), "model": f.effect.model, "fit": fit_figures(diag, f)}
+    if f.kind == "resized":
+        out["evidence"] = {"physics_left_out": f"{f.effect.physics}: in the nominal model, but mis-sized",
+                           "z": {c.name: round(c.z, 2) for c in f.resized},
+                           "test": "estimate against the prior (nominal +- tolerance); p two-sided, "
+                                   "Bonferroni over the effect's parameters"}
+        out["parameters"] = {c.name: {k: v for k, v in c.as_dict().items() if k in ("nominal", "estimate", "lo", "hi",
+                                                                                   "tolerance")}
+                             for c in f.resized}
+        return out
+    h = f.hypothesis
+    out["evidence"] = {
+        "physics_left_out": f.effect.physics,
+        "held_out_gain": round(h.gain.gain, 5),
+        "z": round(h.gain.z, 2),
+        "p_value_raw": h.p_raw,
+        "folds_improved": f"{int(np.sum(h.gain.fold_gains > 0))}/{len(h.gain.fold_gains)}",
+        "delta_bic": round(h.delta_bic, 1),
+        "runner_up": ({"effect": f.runner_up.effect.id, "held_out_gain": round(f.runner_up.gain.gain, 5)}
+                      if f.runner_up else None),
+    }
+    out["parameters"] = {n: final_params[n] for n in _reported(f.fitted)}
+    out["intervals"] = {n: _interval(diag.last_fit.std, final_params, n) for n in f.fitted}
+    if f.kind == "ambiguous":
+        hypotheses = [h] + f.alternatives
+        total = sum(max(x.gain.gain, 0.0) for x in hypotheses) or 1.0
+        out["alternatives"] = [_alternative(x, max(x.gain.gain, 0.0) / total) for x in hypotheses]
+        out["separate_by"] = separate_by([x.effect for x in hypotheses])
+    return out
+
+
+def document(result) -> dict:
+    diag = result.engine
+    if result.findings:
         verdict = "missing_physics"
     else:
-        verdict = "unexplained" if unexplained else "consistent"
-    findings = []
-    for f in diag.findings:
-        findings.append({
-            "effect": f.effect.id,
-            "confidence": f.confidence,
-            "where": where(diag, f),
-            "evidence": {
-                "physics_left_out": f.effect.physics,
-                "held_out_gain": round(f.gain.gain, 5),
-                "z": round(f.gain.z, 2),
-                "folds_improved": f"{int(np.sum(f.gain.fold_gains > 0))}/{len(f.gain.fold_gains)}",
-                "delta_bic": round(f.delta_bic, 1),
-                "runner_up": ({"effect": f.runner_up[0], "held_out_gain": round(f.runner_up[1], 5)}
-                              if f.runner_up else None),
-            },
-            "model": f.effect.model,
-            "parameters": {n: final_params[n] for n in _reported(f)},
-            "fit": fit_figures(diag, f),
-        })
-    return {
+        verdict = "unexplained" if result.unexplained else "consistent"
+    recordings = [{"path": r.path, "samples": len(r), "duration": r.duration} for r in diag.recordings]
+    doc = {
         "verdict": verdict,
-        "findings": findings,
-        "params": final_params,
-        "calibration": {n: {"nominal": a, "calibrated": b} for n, (a, b) in diag.calibration.items()},
-        "not_testable": diag.not_testable,
-        "hypotheses_tested": diag.tested,
-        "unexplained": unexplained,
-        "noise": {c: round(s, 6) for c, s in diag.sigma.items()},
-        "estimator": estimator_comparison(diag, final_params),
-        "recording": {"path": diag.source.path, "samples": len(diag.source), "duration": diag.source.duration,
-                      "torque_sensor": diag.has_sensor, "analysed_samples": len(diag.rec)},
+        "findings": [finding_document(result, f) for f in result.findings],
+        "params": result.params,
+        "calibration": {n: c.as_dict() for n, c in result.calibration.items()},
+        "beyond_tolerance": [c.name for c in result.beyond_tolerance],
+        "not_testable": result.not_testable,
+        "hypotheses_tested": result.tested,
+        "false_discovery_rate": FALSE_DISCOVERY_RATE,
+        "unexplained": result.unexplained,
+        "located": result.located,
+        "noise": {c: round(s, 6) for c, s in result.sigma.items()},
+        "estimator": estimator_comparison(diag, result.params),
+        "recording": dict(recordings[0], torque_sensor=diag.has_sensor, analysed_samples=len(diag.rec)),
     }
+    if len(recordings) > 1:
+        doc["recordings"] = recordings
+    return doc
 
 
-def _reported(f) -> list[str]:
-    extra = []
-    for n in f.fitted:
-        if n.endswith(("_a", "_b")) and not n.startswith(("al", "bl", "aw", "bw")):
-            extra.append(n[:-2] + "_order" if n.startswith("ke_") else "cog_order")
-    return list(dict.fromkeys(f.fitted + extra))
+def _reported(fitted) -> list[str]:
+    """The fitted parameters, and the order of each angle-order slot among them (ke_m1_a -> ke_m1_order)."""
+    table = parameters.table()
+    slots = [n[:-2] + "_order" for n in fitted if n.endswith(("_a", "_b")) and n[:-2] + "_order" in table]
+    return list(dict.fromkeys(list(fitted) + slots))

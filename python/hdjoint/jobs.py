@@ -95,8 +95,9 @@ DIAGNOSIS_FILES = ("findings.json", "params.json", "params.ssv", "report.html")
 
 
 def diagnose_to_directory(recording, params, out, validate=(), time_unit: str | None = None) -> dict:
-    """Diagnose RECORDING against PARAMS (a JSON path, or None for the
-    defaults) and write findings.json, params.json, params.ssv and
+    """Diagnose RECORDING (a path, or a list of paths of one joint, fitted
+    jointly) against PARAMS (a JSON path, or None for the defaults; its
+    "tolerance" object overrides the calibration priors) and write findings.json, params.json, params.ssv and
     report.html into OUT. Returns the findings document. Raises UserError
     for bad input; nothing is written unless everything was computed."""
     import json
@@ -104,18 +105,27 @@ def diagnose_to_directory(recording, params, out, validate=(), time_unit: str | 
     from . import parameters, report
     from .diagnosis import DiagnosisError, diagnose
     from .validation import validate as validate_on
-    check_output_directory(out, DIAGNOSIS_FILES, inputs=(recording, params, *validate))  # before any work
-    rec = read_recording(recording, time_unit)
-    others = [read_recording(path, time_unit) for path in validate]  # read first: a bad file stops before any work
+DIAGNOSIS_FILES = ("findings.json", "params.json", "params.ssv", "report.html")
+
+
+def diagnose_to_directory(recording, params, out, validate=(), time_unit: str | None = None) -> dict:
+    """Diagnose RECORDING (a path, or a list of paths of one joint, fitted
+    jointly) against PARAMS (a JSON path, or None for the defaults; its
+    "tolerance" object overrides the calibration priors) and write findings.json, params.json, params.ssv and
     nominal = read_params(params)
     try:
-        diag, doc = diagnose(rec, nominal, progress=_progress)
+        tolerance = parameters.load_tolerances(params)
+    except parameters.ParameterError as e:
+        raise UserError(str(e)) from None
+    try:
+        result, doc = diagnose(recs if len(recs) > 1 else recs[0], nominal, progress=_progress, tolerance=tolerance)
         if others:
             _progress("checking the corrected model on the other recordings")
-            doc["validation"] = [validate_on(o, diag.nominal, diag.calibrated_params, doc["params"]) for o in others]
+            doc["validation"] = [validate_on(o, result.nominal, result.calibrated_params, doc["params"])
+                                 for o in others]
     except DiagnosisError as e:
         raise UserError(str(e)) from None
-    page = report.build(diag, doc)
+    page = report.build(result, doc)
     # Everything is computed; stage the files, then move them in, so a
     # failure never leaves a half-written OUT.
     out = Path(out)

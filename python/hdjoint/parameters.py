@@ -41,6 +41,18 @@ class ParameterInfo:
     scope: str  # "shared", "plant" or "estimator"
     description: str
     value_reference: int
+    # The calibration prior (src/hdjoint/parameter_tolerance.def): NaN when never calibrated.
+    tolerance_relative: float = math.nan
+    tolerance_absolute: float = math.nan
+    tolerance_source: str = ""
+
+    def calibrated(self) -> bool:
+        return not math.isnan(self.tolerance_relative)
+
+    def tolerance(self, nominal: float, relative: float | None = None) -> float:
+        """One standard deviation of the prior around `nominal`: max(relative*|nominal|, absolute)."""
+        rel = self.tolerance_relative if relative is None else relative
+        return max(rel * abs(nominal), self.tolerance_absolute)
 
     def in_estimator(self) -> bool:
         return self.scope in ("shared", "estimator")
@@ -105,11 +117,12 @@ def check(params: dict, source: str = "parameter set") -> dict[str, float]:
     return checked
 
 
-def load(path: str | os.PathLike | None) -> dict[str, float]:
-    """Defaults overridden by a JSON parameter file (None: defaults only)."""
-    params = defaults()
-    if path is None:
-        return params
+# The parameter file's key for the user's own calibration priors:
+# {"Kt": 0.046, "tolerance": {"Kt": 0.1}} states Kt to +-10 % (relative).
+TOLERANCE_KEY = "tolerance"
+
+
+def _read_json(path) -> dict:
     try:
         text = Path(path).read_text()
     except OSError as e:
@@ -118,8 +131,46 @@ def load(path: str | os.PathLike | None) -> dict[str, float]:
         data = json.loads(text)
     except json.JSONDecodeError as e:
         raise ParameterError(f"{path}: line {e.lineno}, column {e.colno}: not valid JSON ({e.msg})") from None
+    if not isinstance(data, dict):
+        raise ParameterError(f"{path}: expected a JSON object of name: value")
+    return data
+
+
+def check_tolerances(overrides, source: str = "parameter set") -> dict[str, float]:
+    """Validate the user's relative tolerances: known, calibrated parameters, finite and positive."""
+    info = table()
+    if not isinstance(overrides, dict):
+        raise ParameterError(f"{source}: '{TOLERANCE_KEY}' must be an object of name: relative tolerance")
+    checked = {}
+    for name, value in overrides.items():
+        if name not in info:
+            raise ParameterError(f"{source}: '{TOLERANCE_KEY}' names an unknown parameter '{name}'")
+        if not info[name].calibrated():
+            raise ParameterError(f"{source}: '{TOLERANCE_KEY}' names '{name}', which the diagnosis never calibrates")
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+            raise ParameterError(f"{source}: tolerance of '{name}' must be a positive number "
+                                 f"(a fraction of the nominal value, 0.1 for +-10 %), not {value!r}")
+        checked[name] = float(value)
+    return checked
+
+
+def load(path: str | os.PathLike | None) -> dict[str, float]:
+    """Defaults overridden by a JSON parameter file (None: defaults only).
+    Its optional "tolerance" object is checked here and read by load_tolerances."""
+    params = defaults()
+    if path is None:
+        return params
+    data = _read_json(path)
+    check_tolerances(data.pop(TOLERANCE_KEY, {}), str(path))
     params.update(check(data, str(path)))
     return params
+
+
+def load_tolerances(path: str | os.PathLike | None) -> dict[str, float]:
+    """The user's relative tolerances from a parameter file ({} when it states none)."""
+    if path is None:
+        return {}
+    return check_tolerances(_read_json(path).get(TOLERANCE_KEY, {}), str(path))
 
 
 def _atomic_write(path: str | os.PathLike, text: str) -> None:

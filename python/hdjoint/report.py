@@ -4,7 +4,6 @@ model added and the fit before and after."""
 from __future__ import annotations
 
 import html
-import json
 
 import matplotlib
 
@@ -14,6 +13,7 @@ import numpy as np  # noqa: E402
 
 from . import diagnosis_plots as dp  # noqa: E402
 from .plots import to_data_uri  # noqa: E402
+from .structure import candidate_orders  # noqa: E402
 
 VERDICT_TEXT = {
     "missing_physics": "Physics is missing from the nominal model: the findings below name it, model it and "
@@ -44,6 +44,68 @@ def _fmt(x) -> str:
     return f"{x:.4g}" if isinstance(x, (int, float)) else str(x)
 
 
+def _where_text(w: dict) -> str:
+    """A finding's location in words (never a raw dict)."""
+    regime = w["regime"] if isinstance(w["regime"], str) else ", ".join(
+        f"{name} ({ratio}x its share of time)" for name, ratio in w["regime"].items())
+    text = (f"the {w['part']} ({w['channel']} channel), {100 * w['fraction_of_time']:.0f} % of the time; "
+            f"concentrated: {regime}")
+    if w.get("time_segments"):
+        text += "; strongest at " + ", ".join(f"{a:g}-{b:g} s" for a, b in w["time_segments"][:3])
+    if w.get("angle"):
+        text += "; at " + ", ".join(f"order {o['order']:g} of {o['angle']}" for o in w["angle"])
+    return text
+
+
+def _interval_text(v: dict) -> str:
+    return (f"{_fmt(v['estimate'])} [{_fmt(v['lo'])}, {_fmt(v['hi'])}] "
+            f"(nominal {_fmt(v['nominal'])} ± {_fmt(v['tolerance'])})")
+
+
+def _finding_line(f: dict) -> str:
+    head = f"<b>{html.escape(f['kind'])}</b>: {html.escape(f['effect'])} (p = {f['p_value']:.2g})"
+    if f["kind"] == "resized":
+        moved = "; ".join(f"{html.escape(n)} {html.escape(_interval_text(v))}" for n, v in f["parameters"].items())
+        return f"{head}: {moved}"
+    intervals = f.get("intervals", {})
+    values = "; ".join(
+        f"{html.escape(n)} = {_fmt(v)}" + (f" [{_fmt(intervals[n][0])}, {_fmt(intervals[n][1])}]"
+                                          if intervals.get(n) else "")
+        for n, v in f["parameters"].items())
+    if f["kind"] == "ambiguous":
+        alts = " or ".join(f"{html.escape(a['effect'])} ({100 * a['evidence_share']:.0f} % of the evidence)"
+                           for a in f["alternatives"])
+        return f"{head}: one of {alts}; modelled as {html.escape(f['effect'])}: {values}"
+    return f"{head}: {values}"
+
+
+def _summary(doc: dict) -> str:
+    """The box a reader sees first: verdict, findings, moved parameters, what remains, what to record next."""
+    items = [f"<p class='verdict'><b>Verdict: {html.escape(doc['verdict'].replace('_', ' '))}.</b> "
+             f"{html.escape(VERDICT_TEXT[doc['verdict']])}</p>"]
+    if doc["findings"]:
+        items.append("<ul>" + "".join(f"<li>{_finding_line(f)}</li>" for f in doc["findings"]) + "</ul>")
+    moved = [n for n in doc.get("beyond_tolerance", [])]
+    items.append("<p><b>Parameters beyond their tolerance:</b> " + (html.escape(", ".join(
+        f"{n} {_interval_text(doc['calibration'][n])}" for n in moved)) if moved else "none") + ".</p>")
+    items.append("<p><b>Unexplained:</b> " + (html.escape("; ".join(
+        f"{u['channel']} channel against {u['feature']} (held-out gain {u['held_out_gain']:.3g})"
+        for u in doc["unexplained"])) if doc["unexplained"] else "nothing") + ".</p>")
+    advice = [f["separate_by"] for f in doc["findings"] if f.get("separate_by")]
+    advice += [f"To test {n['effect']}, record a motion that removes this: {n['reason']}." for n in doc["not_testable"]]
+    items.append("<p><b>What to record next:</b> " + (html.escape(" ".join(advice)) if advice
+                                                      else "nothing needed to settle these findings") + "</p>")
+    return "<section id='summary' class='summary'>" + "".join(items) + "</section>"
+
+
+def _recording_text(doc: dict) -> str:
+    recordings = doc.get("recordings") or [doc["recording"]]
+    parts = [f"{r['path'] or 'recording'} ({r['samples']} samples, {r['duration']:.1f} s)" for r in recordings]
+    sensor = "with" if doc["recording"]["torque_sensor"] else "without"
+    return (f"Recording{'s fitted jointly' if len(parts) > 1 else ''}: {'; '.join(parts)}, {sensor} a torque sensor; "
+            f"{doc['recording']['analysed_samples']} samples analysed")
+
+
 def _validation_section(entries: list[dict]) -> str:
     rows = []
     for v in entries:
@@ -61,10 +123,11 @@ def _validation_section(entries: list[dict]) -> str:
                                                 "RMS corrected", "max calibrated", "max corrected"]))
 
 
-def build(diag, doc: dict) -> str:
-    """The report's HTML for a finished diagnosis and its findings document."""
+def build(result, doc: dict) -> str:
+    """The report's HTML for a finished diagnosis (DiagnosisResult) and its findings document."""
+    diag = result.engine
     rec, kin = diag.rec, diag.prep.kin
-    p0, p1 = diag.calibrated_params, doc["params"]
+    p0, p1 = result.calibrated_params, doc["params"]
     sections = []
 
     # Where: every channel's residual over time, before and after, segments marked.
@@ -78,8 +141,7 @@ def build(diag, doc: dict) -> str:
         figs.append(_img(_figure(lambda ax: dp.residual_vs_feature(ax, kin.omega_m, before, after,
                                                                     "motor speed (rad/s)"), (6, 3)),
                          f"{c.name}: mean residual vs motor speed (regime)"))
-        travel = np.ptp(rec.theta_m)
-        orders = [k / 2 for k in range(1, 25) if k / 2 * travel >= 3 * np.pi]
+        orders = candidate_orders("theta_m", np.ptp(rec.theta_m))
         if orders:
             figs.append(_img(_figure(lambda ax: dp.order_spectrum(ax, rec.theta_m, before, after, orders,
                                                                    "theta_m"), (6, 3)),
@@ -98,18 +160,24 @@ def build(diag, doc: dict) -> str:
 
     # Findings.
     if doc["findings"]:
-        rows = [(f["effect"], f["where"]["part"], f["confidence"], _fmt(f["fit"]["holdout_rms_before"]),
-                 _fmt(f["fit"]["holdout_rms_after"]), f["evidence"]["folds_improved"]) for f in doc["findings"]]
-        parts = ["<h2>Findings</h2>", _table(rows, ["effect", "part", "confidence", "held-out RMS before (N.m)",
-                                                    "after (N.m)", "folds improved"])]
+        rows = [(f["effect"], f["kind"], f["where"]["part"], f"{f['p_value']:.2g}", f["confidence"],
+                 _fmt(f["fit"]["holdout_rms_before"]), _fmt(f["fit"]["holdout_rms_after"])) for f in doc["findings"]]
+        parts = ["<h2>Findings</h2>", _table(rows, ["effect", "kind", "part", "p-value", "confidence",
+                                                    "held-out RMS before (N.m)", "after (N.m)"])]
         for f in doc["findings"]:
             ev = f["evidence"]
-            parts.append(f"<h3>{html.escape(f['effect'])}</h3><p><b>Left out:</b> {html.escape(ev['physics_left_out'])}."
-                         f" <b>Model added:</b> {html.escape(f['model'])}.</p>"
-                         f"<p><b>Where:</b> {html.escape(json.dumps(f['where'], default=str))}</p>"
-                         f"<p><b>Evidence:</b> held-out gain {100 * ev['held_out_gain']:.2f} % (z = {ev['z']}),"
-                         f" ΔBIC {ev['delta_bic']}, runner-up {html.escape(json.dumps(ev['runner_up']))}.</p>"
-                         f"<p><b>Parameters:</b> {html.escape(', '.join(f'{k} = {_fmt(v)}' for k, v in f['parameters'].items()))}</p>")
+            text = (f"<h3>{html.escape(f['effect'])} ({html.escape(f['kind'])}, p = {f['p_value']:.2g})</h3>"
+                    f"<p><b>Left out:</b> {html.escape(ev['physics_left_out'])}. <b>Model:</b> "
+                    f"{html.escape(f['model'])}.</p><p><b>Where:</b> {html.escape(_where_text(f['where']))}.</p>")
+            if "held_out_gain" in ev:
+                runner = (f"{ev['runner_up']['effect']} (held-out gain {100 * ev['runner_up']['held_out_gain']:.2f} %)"
+                          if ev["runner_up"] else "none")
+                text += (f"<p><b>Evidence:</b> held-out gain {100 * ev['held_out_gain']:.2f} % (z = {ev['z']}, "
+                         f"{ev['folds_improved']} folds better), p = {f['p_value']:.2g} against a simulated null, "
+                         f"ΔBIC {ev['delta_bic']}, runner-up {html.escape(runner)}.</p>")
+            if f.get("separate_by"):
+                text += f"<p><b>Look-alikes:</b> {html.escape(f['separate_by'])}</p>"
+            parts.append(text + f"<p>{_finding_line(f)}</p>")
         sections.append("".join(parts))
 
     # Fit before/after and the estimator.
@@ -129,9 +197,12 @@ def build(diag, doc: dict) -> str:
     if doc.get("validation"):
         sections.append(_validation_section(doc["validation"]))
 
-    cal = [(n, _fmt(v["nominal"]), _fmt(v["calibrated"])) for n, v in doc["calibration"].items()]
-    sections.append("<h2>Calibration of the nominal parameters</h2>" + _table(cal, ["parameter", "nominal",
-                                                                                     "calibrated"]))
+    cal = [(n, _fmt(v["nominal"]), _fmt(v["estimate"]), f"[{_fmt(v['lo'])}, {_fmt(v['hi'])}]", _fmt(v["tolerance"]),
+            f"{v['z']:.2f}", "yes" if v["identified"] else "no") for n, v in doc["calibration"].items()]
+    sections.append("<h2>Calibration of the nominal parameters</h2><p>Maximum a posteriori, each parameter's "
+                    "tolerance its prior; 95 % intervals from the Laplace approximation; z = (estimate - nominal) / "
+                    "tolerance; identified: the recording narrows the prior by more than half.</p>" + _table(
+                        cal, ["parameter", "nominal", "estimate", "95 % interval", "tolerance", "z", "identified"]))
     if doc["unexplained"]:
         sections.append("<h2>Unexplained structure</h2>" + _table(
             [(u["channel"], u["feature"], u["held_out_gain"], u["largest_at"]) for u in doc["unexplained"]],
@@ -145,7 +216,8 @@ def build(diag, doc: dict) -> str:
             "</title><style>body{font-family:sans-serif;max-width:70em;margin:1.5em auto;color:#222}"
             "table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:.2em .5em}"
             "img{max-width:100%}figure{margin:.5em 0}figcaption{font-size:.85em;color:#555}"
-            ".verdict{font-size:1.2em;padding:.5em;background:#eef}</style></head><body>"
-            f"<h1>{html.escape(title)}</h1><p class='verdict'>{html.escape(VERDICT_TEXT[doc['verdict']])}</p>"
-            f"<p>Recording: {html.escape(str(doc['recording']))}; diagnosed in {doc.get('seconds', '?')} s.</p>"
+            ".summary{border:2px solid #446;padding:.3em 1em;background:#f4f4fb}.verdict{font-size:1.15em}"
+            "</style></head><body>"
+            f"<h1>{html.escape(title)}</h1>" + _summary(doc) +
+            f"<p>{html.escape(_recording_text(doc))}; diagnosed in {doc.get('seconds', '?')} s.</p>"
             + "".join(sections) + "</body></html>")

@@ -45,8 +45,9 @@ def held_out_gain_sq(before, after, fold, test) -> HeldOutGain:
     return HeldOutGain(float(gain), z, relative)
 
 
-def binned_prediction(feature, residual, train, bins: int = 20, circular_period: float | None = None):
-    """Per-bin mean of the training residual, applied everywhere (NaN-free)."""
+def bins_of(feature, residual, bins: int = 20, circular_period: float | None = None):
+    """Each sample's bin of `feature` (quantile bins, or equal ones over a
+    period), the bin edges, and where both are finite; None when too few bins."""
     x = np.mod(feature, circular_period) if circular_period else feature
     ok = np.isfinite(x) & np.isfinite(residual)
     if circular_period:
@@ -54,8 +55,15 @@ def binned_prediction(feature, residual, train, bins: int = 20, circular_period:
     else:
         edges = np.unique(np.nanpercentile(x[ok], np.linspace(0, 100, bins + 1)))
     if len(edges) < 3:
+        return None, edges, ok
+    return np.clip(np.searchsorted(edges, x, side="right") - 1, 0, len(edges) - 2), edges, ok
+
+
+def binned_prediction(feature, residual, train, bins: int = 20, circular_period: float | None = None):
+    """Per-bin mean of the training residual, applied everywhere (NaN-free)."""
+    index, edges, ok = bins_of(feature, residual, bins, circular_period)
+    if index is None:
         return np.zeros_like(residual), edges, np.zeros(1)
-    index = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, len(edges) - 2)
     use = ok & train
     sums = np.bincount(index[use], weights=residual[use], minlength=len(edges) - 1)
     counts = np.bincount(index[use], minlength=len(edges) - 1)
@@ -70,6 +78,7 @@ class Structure:
     peak_at: str      # where along the feature the residual is largest
     edges: np.ndarray
     means: np.ndarray
+    bin_index: np.ndarray | None = None  # each sample's bin (the regressors of the binned prediction)
 
 
 def scan(residual, features: dict, fold, train, test) -> list[Structure]:
@@ -82,7 +91,7 @@ def scan(residual, features: dict, fold, train, test) -> list[Structure]:
         gain = held_out_gain(centred, pred, fold, test)
         k = int(np.argmax(np.abs(means))) if len(means) else 0
         where = f"{edges[k]:.3g} to {edges[k + 1]:.3g} {unit}" if len(edges) > k + 1 else ""
-        found.append(Structure(name, gain, where, edges, means))
+        found.append(Structure(name, gain, where, edges, means, bins_of(values, centred, circular_period=period)[0]))
     return sorted(found, key=lambda s: -s.gain.gain)
 
 
@@ -93,6 +102,14 @@ class Order:
     amplitude: float  # of the residual component, residual units
     gain: HeldOutGain
     prominence: float  # power at this order over the median power at off-orders
+
+
+def candidate_orders(angle: str, travel: float) -> list[float]:
+    """The order grid searched on `angle` ("theta_m": half orders up to 12,
+    "theta_l": whole orders up to 40), keeping orders the recording's travel
+    (rad) covers at least 1.5 times: a ripple needs periods to be told from a drift."""
+    grid = [k / 2 for k in range(1, 25)] if angle == "theta_m" else [float(k) for k in range(1, 41)]
+    return [k for k in grid if k * travel >= 3 * np.pi]
 
 
 def _basis(angle, order, through):

@@ -15,12 +15,27 @@ const ParameterInfo kTable[] = {
 #undef HDJ_PARAMETER
 };
 constexpr std::size_t kCount = sizeof(kTable) / sizeof(kTable[0]);
+const ToleranceInfo kTolerances[] = {
+#define HDJ_TOLERANCE(name, relative, absolute, source) {#name, relative, absolute, source},
+#include "parameter_tolerance.def"
+#undef HDJ_TOLERANCE
+};
+constexpr std::size_t kToleranceCount = sizeof(kTolerances) / sizeof(kTolerances[0]);
 // A parameter's value reference is its index; the FMUs number inputs from 100.
 static_assert(kCount < 100, "parameter value references would collide with the FMUs' inputs (100+)");
 }  // namespace
 
 const ParameterInfo* parameter_table() { return kTable; }
 std::size_t parameter_count() { return kCount; }
+
+const ToleranceInfo* tolerance_table() { return kTolerances; }
+std::size_t tolerance_count() { return kToleranceCount; }
+
+const ToleranceInfo* find_tolerance(const std::string& name) {
+    for (std::size_t i = 0; i < kToleranceCount; ++i)
+        if (name == kTolerances[i].name) return &kTolerances[i];
+    return nullptr;
+}
 
 std::optional<std::size_t> find_parameter(const std::string& name) {
     for (std::size_t i = 0; i < kCount; ++i)

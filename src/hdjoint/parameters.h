@@ -31,6 +31,19 @@ struct ParameterInfo {
 const ParameterInfo* parameter_table();
 std::size_t parameter_count();
 
+// The calibration prior of a parameter (parameter_tolerance.def): one
+// standard deviation max(relative*|nominal|, absolute); `source` cites it.
+struct ToleranceInfo {
+    const char* name;
+    double relative;
+    double absolute;
+    const char* source;
+};
+const ToleranceInfo* tolerance_table();
+std::size_t tolerance_count();
+// The tolerance row of a parameter, or nothing when it is never calibrated.
+const ToleranceInfo* find_tolerance(const std::string& name);
+
 // Index of a parameter by name, or nothing.
 std::optional<std::size_t> find_parameter(const std::string& name);
 

@@ -211,5 +211,23 @@ TEST(Parameters, ValidateChecksOnlyTheParametersTheFmuCarries) {
     }
 }
 
+// parameter_tolerance.def joins the table by name: a misspelt or removed
+// parameter must not leave a prior that nothing reads.
+TEST(Parameters, EveryToleranceNamesAParameterOnceWithACitedSpread) {
+    std::set<std::string> seen;
+    ASSERT_GT(tolerance_count(), 10u);
+    for (std::size_t i = 0; i < tolerance_count(); ++i) {
+        const ToleranceInfo& t = tolerance_table()[i];
+        EXPECT_TRUE(find_parameter(t.name).has_value()) << t.name << " in parameter_tolerance.def is not a parameter";
+        EXPECT_TRUE(seen.insert(t.name).second) << "two tolerances for " << t.name;
+        EXPECT_GE(t.relative, 0.0) << t.name;
+        EXPECT_GE(t.absolute, 0.0) << t.name;
+        EXPECT_GT(t.relative + t.absolute, 0.0) << t.name << " has a zero-width prior";
+        EXPECT_GT(std::string(t.source).size(), 4u) << t.name << " cites no source";
+        EXPECT_EQ(find_tolerance(t.name), &t);
+    }
+    EXPECT_EQ(find_tolerance("N"), nullptr);  // the gear ratio is exact: never calibrated
+}
+
 }  // namespace
 }  // namespace hdjoint

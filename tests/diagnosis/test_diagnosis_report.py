@@ -1,4 +1,7 @@
-"""The diagnosis report renders, with its figures, in a real headless browser."""
+"""The diagnosis report renders, with its figures, in a real headless
+browser; it opens with the summary box, and prints no raw dict or JSON."""
+import json
+import re
 import shutil
 import subprocess
 
@@ -31,15 +34,49 @@ def test_report_is_self_contained(report_dir):
     assert "src=\"http" not in page and "href=\"http" not in page
 
 
-@pytest.mark.skipif(CHROMIUM is None, reason="Debian's chromium is not installed (scripts/test.sh installs it)")
-def test_report_renders_with_its_figures_in_chromium(report_dir, tmp_path):
-    shot = tmp_path / "report.png"
+def _visible_text(page: str) -> str:
+    page = re.sub(r"<style>.*?</style>", "", page, flags=re.S)
+    return re.sub(r"<[^>]+>", " ", page)
+
+
+def test_report_has_a_summary_first_and_no_raw_dicts(report_dir):
+    page = (report_dir / "report.html").read_text()
+    doc = json.loads((report_dir / "findings.json").read_text())
+    text = _visible_text(page)
+    assert "{" not in text and "}" not in text, "a raw dict or JSON object is printed in the report"
+    summary = page[page.index("id='summary'"):page.index("</section>")]
+    assert f"Verdict: {doc['verdict'].replace('_', ' ')}" in summary
+    for f in doc["findings"]:
+        assert f["effect"] in summary and f"p = {f['p_value']:.2g}" in summary
+    assert "What to record next" in summary and "beyond their tolerance" in summary
+    assert page.index("id='summary'") < page.index("<figure>")
+
+
+def _screenshot(report_dir, tmp_path, height: int):
+    shot = tmp_path / f"report_{height}.png"
     subprocess.run([CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
                     "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                    f"--user-data-dir={tmp_path / 'profile'}", "--hide-scrollbars", "--window-size=1200,2400",
+                    f"--user-data-dir={tmp_path / 'profile'}", "--hide-scrollbars", f"--window-size=1200,{height}",
                     f"--screenshot={shot}", (report_dir / "report.html").as_uri()],
                    check=True, capture_output=True, timeout=120)
-    image = imread(shot)[..., :3]
+    return imread(shot)[..., :3]
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="Debian's chromium is not installed (scripts/test.sh installs it)")
+def test_the_summary_box_is_whole_on_the_first_screen(report_dir, tmp_path):
+    """The summary's frame (#446 border) must show its top and bottom edges
+    inside a laptop's first screen (1200 x 800): pushed below the fold, or
+    longer than a screen, it fails."""
+    image = _screenshot(report_dir, tmp_path, 800)
+    frame = np.all(np.abs(image - np.array([0x44, 0x44, 0x66]) / 255.0) < 0.06, axis=2)
+    edge_rows = np.flatnonzero(frame.sum(axis=1) > 0.5 * image.shape[1])
+    assert len(edge_rows) >= 2, "the summary box's frame is not on the first screen"
+    assert edge_rows[-1] - edge_rows[0] > 60, "only one edge of the summary box is on the first screen"
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="Debian's chromium is not installed (scripts/test.sh installs it)")
+def test_report_renders_with_its_figures_in_chromium(report_dir, tmp_path):
+    image = _screenshot(report_dir, tmp_path, 2400)
     assert image.shape[0] >= 2000
     # Figures are drawn in colour (red/blue residual lines); a page of text alone is grey.
     colourful = np.mean(np.ptp(image, axis=2) > 0.25)

@@ -47,7 +47,8 @@ def test_each_window_is_filtered_and_simulated_on_its_own(long_rec):
 def test_a_long_recording_is_diagnosed_in_windows(long_rec, monkeypatch):
     case, rec = long_rec
     monkeypatch.setattr(diagnosis, "ANALYSED_SECONDS", 8.0)
-    diag, doc = diagnosis.diagnose(rec, nominal_for(case))
+    result, doc = diagnosis.diagnose(rec, nominal_for(case))
+    diag = result.engine
     assert len(diag.rec) < 0.4 * len(rec)
     assert doc["recording"]["samples"] == len(rec) and doc["recording"]["analysed_samples"] == len(diag.rec)
     # The windows are the folds: each one wholly fitted or wholly held out.

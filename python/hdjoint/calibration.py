@@ -1,0 +1,88 @@
+"""The calibration's priors and posteriors.
+
+Every calibrated parameter has a prior: a normal around its nominal value
+whose standard deviation is its tolerance (src/hdjoint/parameter_tolerance.def,
+overridable per parameter in the parameter file). The fit is the maximum a
+posteriori; its posterior is the Laplace (Gauss-Newton) approximation at the
+optimum. A parameter is identified by the recording when its posterior is
+less than half as wide as its prior, and moved beyond its tolerance when
+its estimate lies more than RESIZE_Z tolerances from the nominal value.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.stats import norm
+
+from . import parameters
+
+RESIZE_Z = 3.0       # |estimate - nominal| / tolerance beyond which a parameter counts as resized
+IDENTIFIED_RATIO = 0.5  # posterior std / prior std below which the recording identifies a parameter
+INTERVAL = 0.95
+
+
+@dataclass(frozen=True)
+class Prior:
+    centre: float
+    std: float
+
+
+def priors(names, nominal: dict, tolerance: dict[str, float], centres: dict | None = None) -> dict[str, Prior]:
+    """A prior for each name: around its nominal value (or `centres[name]`),
+    one tolerance wide (the user's relative `tolerance` overrides the table's)."""
+    table = parameters.table()
+    out = {}
+    for n in names:
+        info = table[n]
+        if not info.calibrated():
+            raise ValueError(f"parameter '{n}' has no tolerance in parameter_tolerance.def: it cannot be calibrated")
+        value = nominal.get(n, info.default)
+        out[n] = Prior((centres or {}).get(n, value), info.tolerance(value, tolerance.get(n)))
+    return out
+
+
+def posterior_std(jacobian: np.ndarray, scale: np.ndarray) -> np.ndarray:
+    """Laplace standard deviations from the Jacobian of the whitened residuals
+    (data and priors) in the fit's scaled coordinates."""
+    info = jacobian.T @ jacobian
+    cov = np.linalg.pinv(info)
+    return np.sqrt(np.clip(np.diag(cov), 0.0, None)) * scale
+
+
+@dataclass
+class Calibrated:
+    name: str
+    nominal: float
+    estimate: float
+    std: float          # posterior (Laplace)
+    prior: Prior
+
+    @property
+    def interval(self) -> tuple[float, float]:
+        info = parameters.table()[self.name]
+        half = norm.ppf(0.5 + INTERVAL / 2) * self.std
+        return max(self.estimate - half, info.min), min(self.estimate + half, info.max)
+
+    @property
+    def z(self) -> float:
+        return (self.estimate - self.prior.centre) / self.prior.std
+
+    @property
+    def identified(self) -> bool:
+        return self.std < IDENTIFIED_RATIO * self.prior.std
+
+    @property
+    def beyond_tolerance(self) -> bool:
+        return abs(self.z) > RESIZE_Z
+
+    @property
+    def p_value(self) -> float:
+        """Two-sided probability of |z| this large were the parameter within its prior."""
+        return float(2.0 * norm.sf(abs(self.z)))
+
+    def as_dict(self) -> dict:
+        lo, hi = self.interval
+        return {"nominal": self.nominal, "estimate": self.estimate, "lo": lo, "hi": hi,
+                "tolerance": self.prior.std, "z": round(self.z, 3), "identified": bool(self.identified),
+                "interval": "laplace"}

@@ -1,0 +1,49 @@
+"""Look-alikes: a hypothesis that a look-alike explains as well, fold by
+fold, is reported as one ambiguous finding with both and the excitation
+that would separate them; a clearly better one is added alone."""
+import numpy as np
+
+from hdjoint.diagnosis import Hypothesis, _finding_for
+from hdjoint.effects import EFFECTS
+from hdjoint.findings import separate_by
+from hdjoint.structure import HeldOutGain
+
+
+def _hypothesis(effect_id, fold_gains, p_value=1e-4):
+    gains = np.asarray(fold_gains, float)
+    z = float(np.mean(gains) / (np.std(gains, ddof=1) / np.sqrt(len(gains))))
+    h = Hypothesis(EFFECTS[effect_id], {}, {}, list(EFFECTS[effect_id].params), HeldOutGain(float(np.mean(gains)), z,
+                                                                                            gains), -50.0)
+    h.p_raw = h.p_value = p_value
+    return h
+
+
+RNG = np.random.default_rng(2)
+FOLD_GAINS = 0.05 + 0.01 * RNG.normal(size=20)
+
+
+def test_two_lookalikes_explaining_the_same_structure_are_one_ambiguous_finding():
+    best = _hypothesis("wave_generator_compliance", FOLD_GAINS)
+    rival = _hypothesis("stiffness_nonlinearity", FOLD_GAINS * 0.97 + 0.002 * RNG.normal(size=20))
+    finding = _finding_for(best, [rival])
+    assert finding.kind == "ambiguous" and [a.effect.id for a in finding.alternatives] == ["stiffness_nonlinearity"]
+    sentence = separate_by([best.effect, rival.effect])
+    assert "wider torque range" in sentence and "stiffness_nonlinearity" in sentence
+
+
+def test_a_lookalike_the_better_hypothesis_beats_fold_by_fold_is_not_reported():
+    best = _hypothesis("wave_generator_compliance", FOLD_GAINS)
+    rival = _hypothesis("stiffness_nonlinearity", FOLD_GAINS * 0.3 + 0.002 * RNG.normal(size=20))
+    assert _finding_for(best, [rival]).kind == "added"
+
+
+def test_an_insignificant_lookalike_or_an_unrelated_effect_leaves_the_finding_added():
+    best = _hypothesis("coulomb_friction", FOLD_GAINS)
+    assert _finding_for(best, [_hypothesis("stribeck_friction", FOLD_GAINS, p_value=0.3)]).kind == "added"
+    assert _finding_for(best, [_hypothesis("gravity_load", FOLD_GAINS)]).kind == "added"
+
+
+def test_every_lookalike_names_an_effect_and_the_excitation_that_reveals_it():
+    for effect in EFFECTS.values():
+        assert set(effect.lookalikes) <= set(EFFECTS), effect.id
+        assert len(effect.revealed_by) > 15, effect.id
