@@ -107,7 +107,8 @@ def run(seeds: list[int], duration: float, only: str | None, which: str, path: P
 def _machine() -> str:
     cpu = next((line.split(":", 1)[1].strip() for line in Path("/proc/cpuinfo").read_text().splitlines()
                 if line.startswith("model name")), platform.processor()) if Path("/proc/cpuinfo").exists() else ""
-    return f"{platform.node()}, {cpu}, {os.cpu_count()} cores, Python {platform.python_version()}"
+    load = f", load average {os.getloadavg()[0]:.0f} when written" if hasattr(os, "getloadavg") else ""
+    return f"{platform.node()}, {cpu}, {os.cpu_count()} cores{load}, Python {platform.python_version()}"
 
 
 def _commit() -> str:
@@ -130,6 +131,8 @@ def write_table(rows: list[dict], path: Path = TABLE) -> str:
     named_all = lambda r: set(r["present"]) <= {e for f in r["runs"][0]["findings"] for e in f["named"]}  # noqa: E731
     closure_rows = [r for r in rows if r["present"] and len(r["runs"]) > 1]
     closed = lambda r: r["runs"][1]["verdict"] == "consistent"  # noqa: E731
+    # Closure means something only when the first diagnosis modelled what was missing.
+    closed_named = [r for r in closure_rows if named_all(r) and closed(r)]
     alarms = sum(run["verdict"] != "consistent" for run in controls)
     times = [run["seconds"] for r in rows for run in r["runs"] if run.get("seconds") is not None]
     sims = [run["simulate_seconds"] for r in rows for run in r["runs"]]
@@ -151,7 +154,8 @@ def write_table(rows: list[dict], path: Path = TABLE) -> str:
         f"{_pct(sum(map(first_named, single)), len(single))} | >= {100 * GOALS['named_first']:.0f} % |",
         f"| several effects: all named | {_pct(sum(map(named_all, multi)), len(multi))} | all |",
         f"| closure: corrected set `consistent` on the second recording | "
-        f"{_pct(sum(map(closed, closure_rows)), len(closure_rows))} | >= {100 * GOALS['closure']:.0f} % |",
+        f"{_pct(sum(map(closed, closure_rows)), len(closure_rows))}; with every effect named on the first: "
+        f"{_pct(len(closed_named), len(closure_rows))} | >= {100 * GOALS['closure']:.0f} % |",
         f"| diagnosis time per recording (mean / max) | "
         f"{(sum(times) / len(times)) if times else 0:.1f} / {max(times, default=0):.1f} s | <= 20 s per 58 s |",
         f"| truth simulation per recording (mean / max) | "

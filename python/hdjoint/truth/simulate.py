@@ -72,7 +72,7 @@ class _Plant:
         self.theta_l, self.omega_l, self.omega_m = theta_l0, 0.0, 0.0
         self.tau_f = p["mgl"] * math.sin(theta_l0)
         self.theta_m = self._static_motor_angle(theta_l0, self.tau_f)
-        self.x_prev, self.x_rate = self.elastic(), 0.0
+        self.x_prev, self.x_rate = self.geometric(), 0.0
 
     def _static_motor_angle(self, theta_l: float, tau: float) -> float:
         """Motor angle that holds torque `tau` at rest (fixed point: theta_err depends on theta_m)."""
@@ -85,10 +85,18 @@ class _Plant:
                                 + physics.kinematic_error(p, self.form, theta_m, theta_l))
         return theta_m
 
+    def geometric(self) -> float:
+        """Torsion less the kinematic error, before the wave generator's share:
+        its rate is what the structural damping acts on. (The wave generator
+        term is left out of the rate on purpose: it depends on the previous
+        substep's torque, and differencing it closes an algebraic loop that
+        Df/h amplifies beyond 1 per substep.)"""
+        return (self.theta_m / self.N - self.theta_l
+                - physics.kinematic_sum(self.a0, self.kinematic, self.theta_m, self.theta_l))
+
     def elastic(self) -> float:
         """Eq. (3)/(4)/(6): elastic torsion at the current state (wave generator loaded by the last tau_f)."""
-        x = (self.theta_m / self.N - self.theta_l - physics.wave_generator_torsion(self.p, self.tau_f / self.N)
-             - physics.kinematic_sum(self.a0, self.kinematic, self.theta_m, self.theta_l))
+        x = self.geometric() - physics.wave_generator_torsion(self.p, self.tau_f / self.N)
         if self.form.kinematic_torque:
             order, c = self.form.kinematic_torque
             x -= c * self.tau_f * math.cos(order * self.theta_m)
@@ -124,7 +132,7 @@ class _Plant:
 
     def step(self, h: float, current: float, t: float) -> None:
         p, f = self.p, self.form
-        x = self.elastic()
+        x = self.geometric()
         self.x_rate, self.x_prev = (x - self.x_prev) / h, x
         tau_f = self.tau_f = self.transmitted()
         drive = physics.motor_torque_constant(p, f, t) * current + physics.cogging(p, self.theta_m)

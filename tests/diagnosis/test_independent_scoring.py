@@ -1,0 +1,43 @@
+"""How the independent benchmark scores a diagnosis: a look-alike set that
+contains the effect or a resized finding counts as named; a control is a
+false alarm unless `consistent`; closure needs the second recording consistent."""
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
+import diagnosis_independent as bench  # noqa: E402
+
+
+def run(verdict, *findings, excitation="paper"):
+    return {"verdict": verdict, "seconds": 10.0, "simulate_seconds": 5.0, "excitation": excitation,
+            "findings": [dict(f, named=sorted(bench._named(f)), kind=f.get("kind", "added")) for f in findings]}
+
+
+def row(case, present, *runs, seed=0):
+    return {"case": case, "present": list(present), "seed": seed, "duration": 30.0, "runs": list(runs)}
+
+
+def test_scoring_counts_lookalike_sets_and_resized_findings(tmp_path):
+    ambiguous = {"effect": "backlash", "kind": "ambiguous",
+                 "alternatives": [{"effect": "backlash"}, {"effect": "hysteresis"}]}
+    rows = [
+        row("hysteresis", ["hysteresis"], run("missing_physics", ambiguous), run("consistent")),
+        row("kinematic", ["kinematic_error"], run("missing_physics", {"effect": "kinematic_error", "kind": "resized"}),
+            run("unexplained")),
+        row("viscous", ["viscous_friction"], run("missing_physics", {"effect": "time_delay"}), run("consistent")),
+        row("control", [], run("consistent"), run("unexplained", excitation="sweep")),
+    ]
+    text = bench.write_table(rows, tmp_path / "table.md")
+    assert "| single effect named first (added, resized or in a look-alike set) | 2/3 (67 %)" in text
+    assert "| false alarms on controls (verdict not `consistent`) | 1/2 (50 %)" in text
+    assert "2/3 (67 %); with every effect named on the first: 1/3 (33 %)" in text
+    assert (tmp_path / "table.md").read_text() == text
+
+
+def test_results_done_twice_count_once(tmp_path):
+    import json
+    path = tmp_path / "results.jsonl"
+    first = row("control", [], run("consistent"))
+    again = row("control", [], run("unexplained"))
+    path.write_text(json.dumps(first) + "\n" + json.dumps(again) + "\n")
+    assert bench.load_results(path) == [first]
