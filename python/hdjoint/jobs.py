@@ -105,13 +105,10 @@ def diagnose_to_directory(recording, params, out, validate=(), time_unit: str | 
     from . import parameters, report
     from .diagnosis import DiagnosisError, diagnose
     from .validation import validate as validate_on
-DIAGNOSIS_FILES = ("findings.json", "params.json", "params.ssv", "report.html")
-
-
-def diagnose_to_directory(recording, params, out, validate=(), time_unit: str | None = None) -> dict:
-    """Diagnose RECORDING (a path, or a list of paths of one joint, fitted
-    jointly) against PARAMS (a JSON path, or None for the defaults; its
-    "tolerance" object overrides the calibration priors) and write findings.json, params.json, params.ssv and
+    paths = [recording] if isinstance(recording, (str, Path)) else list(recording)
+    check_output_directory(out, DIAGNOSIS_FILES, inputs=(*paths, params, *validate))  # before any work
+    recs = [read_recording(path, time_unit) for path in paths]
+    others = [read_recording(path, time_unit) for path in validate]  # read first: a bad file stops before any work
     nominal = read_params(params)
     try:
         tolerance = parameters.load_tolerances(params)
