@@ -225,3 +225,27 @@ def joint_test_inputs(n: int, dt: float = 1e-3, seed: int = 3) -> np.ndarray:
     i_m = 0.8 * np.sin(2 * np.pi * 2.0 * t) + 0.5 * (t > 0.1) + 0.05 * rng.standard_normal(n)
     tau_ext = 0.3 * np.sin(2 * np.pi * 0.7 * t)
     return np.column_stack([i_m, tau_ext])
+
+
+# ---------------------------------------------------------------- fleet
+# Here, not in tests/fleet/conftest.py: a second module named `conftest`
+# would shadow this one for the tests that import names from it.
+FLEET_ALLOWED_FAILURES = 1  # a recording that kills its worker twice is marked failed
+
+
+@pytest.fixture(scope="session")
+def fleet_client():
+    """A real dask.distributed LocalCluster with 2 worker processes, shared by the fleet tests."""
+    from hdjoint.fleet.run import connect
+    client = connect(None, 2, FLEET_ALLOWED_FAILURES)
+    yield client
+    cluster = client.cluster
+    client.close()
+    cluster.close()
+
+
+@pytest.fixture
+def two_workers(fleet_client):
+    """The client once both workers are up (a killed one is restarted by its nanny)."""
+    fleet_client.wait_for_workers(2, timeout=120)
+    return fleet_client

@@ -23,3 +23,12 @@ def test_demo_does_not_import_the_command_line():
 
 def test_command_line_does_not_import_the_demo():
     assert not {".demo", "hdjoint.demo"} & _imported_modules("hdjoint.cli")
+
+
+def test_one_conftest_for_the_whole_suite():
+    # Test modules import shared names with `from conftest import ...`; a
+    # second conftest.py in a subfolder would shadow the root one for the
+    # whole session and break those imports whenever both are collected.
+    from pathlib import Path
+    tests = Path(__file__).resolve().parents[1]
+    assert [p.relative_to(tests).as_posix() for p in tests.rglob("conftest.py")] == ["conftest.py"]
