@@ -161,7 +161,9 @@ def test_the_sensor_variant_runs_the_same_in_the_masters(master):
     assert np.sqrt(np.mean(d ** 2)) <= 0.2
     # And it is not the estimate-fed system: the torque loop sees another signal.
     shipped = run(master)
-    assert np.abs(shipped["controller.i_m"] - other["controller.i_m"]).max() > 0.1
+    # (The masters agree to 1e-10 on one system, so 0.01 A is another signal,
+    # however small the torque loop's gain k_tau makes its share of i_m.)
+    assert np.abs(shipped["controller.i_m"] - other["controller.i_m"]).max() > 0.01
 
 
 @pytest.mark.parametrize("name", ["JointController", "HarmonicDriveJoint", "JointTorqueEstimator"])
