@@ -93,7 +93,7 @@ def contents(rec, n: float) -> dict:
 
 
 def nominal_for(n: float) -> dict:
-    return dict(parameters.defaults(), N=n, Kt=KT, Kf=K1, Cf=catalogue_cf(), mgl=0.0, jsf_mgl=0.0)
+    return dict(parameters.defaults(), N=n, Kt=KT, Kf=K1, Cf=catalogue_cf(), mgl=0.0)
 
 
 def validate_with_own_zero(rec, nominal: dict, calibration: dict, corrected: dict) -> dict:
