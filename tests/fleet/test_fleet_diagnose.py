@@ -23,8 +23,8 @@ CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 @pytest.fixture(scope="module")
 def diagnosed(tmp_path_factory, fleet_client):
     root = tmp_path_factory.mktemp("fleet")
-    # Fc +10 % a day: +20 % over the three days, inside the diagnosis' calibration range.
-    pmap = generate(root, joints=1, days=3, duration=4.0, drifts={"j1": Drift(("Fc",), 0.10, "coulomb_friction")})
+    # Fc +25 % a day: +50 % over the three days, beyond its 30 % tolerance (so the trend is relevant).
+    pmap = generate(root, joints=1, days=3, duration=4.0, drifts={"j1": Drift(("Fc",), 0.25, "coulomb_friction")})
     (root / "logs" / "robot1" / "j1" / "2026-03-09.csv").write_text("time,i_m,theta_m\n0,0,0\n0.001,0,0\n")
     fleet_client.wait_for_workers(2, timeout=120)
     out = root / "out"
