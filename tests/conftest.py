@@ -40,7 +40,7 @@ _STATUS = ("OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING")
 
 
 def pytest_configure(config):
-    config.addinivalue_line("markers", "slow: compiles C++ (runs by default; deselect with -m 'not slow')")
+    config.addinivalue_line("markers", "slow: over ~5 s (diagnoses, JVMs, compiles, fuzz runs); runs by default, the fast lane deselects it with -m 'not slow'")
 
 
 def pytest_report_header(config):

@@ -43,6 +43,8 @@ import pytest
 
 from hdjoint import cosim
 
+pytestmark = pytest.mark.slow  # five masters, Maestro's JVM among them
+
 STOP = 3.0          # s: the load step is at 2 s
 STEP = 1e-3         # s: the FMUs' sample period
 EXTERNAL = ("libcosim-ssp", "libcosim-osp", "ecos", "maestro")

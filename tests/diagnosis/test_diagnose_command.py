@@ -13,6 +13,8 @@ from hdjoint.diagnosis import DiagnosisError, diagnose
 from hdjoint.fmu_runner import run_estimator_fmu
 from hdjoint.recording import write_recording
 
+pytestmark = pytest.mark.slow  # whole `hdjoint diagnose` runs
+
 EFFECT_IDS = {"kinematic_error", "wave_generator_compliance", "stiffness_nonlinearity", "coulomb_friction",
               "stribeck_friction", "viscous_friction", "hysteresis", "backlash", "cogging", "time_delay",
               "thermal_drift", "gravity_load", "link_friction", "wave_generator_load"}

@@ -11,6 +11,8 @@ from hdjoint.cases import CASES, nominal_for, record
 from hdjoint.diagnosis import diagnose
 from hdjoint.effects import EFFECTS
 
+pytestmark = pytest.mark.slow  # a diagnosis of a 20-30 s recording per case
+
 DURATION = 20.0
 
 

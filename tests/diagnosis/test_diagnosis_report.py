@@ -14,6 +14,8 @@ from hdjoint.cases import CASES, nominal_for, record
 from hdjoint.parameters import save
 from hdjoint.recording import write_recording
 
+pytestmark = pytest.mark.slow  # a diagnosis to report on, and Chromium
+
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 
 

@@ -9,6 +9,8 @@ from hdjoint.cases import CASES, nominal_for, record
 from hdjoint.channels import Prepared, tau_transmission
 from hdjoint.signals import kinematics, sample_windows, window_labels
 
+pytestmark = pytest.mark.slow  # a long recording diagnosed in windows
+
 
 @pytest.fixture(scope="module")
 def long_rec():

@@ -16,6 +16,8 @@ from fmpy.validation import validate_fmu
 
 from hdjoint.fmus import FMU_NAMES, fmu_path
 
+pytestmark = pytest.mark.slow  # VDMCheck2's JVM on each FMU
+
 REPO = Path(__file__).resolve().parents[2]
 VDMCHECK = REPO / "build" / "cosim-tools" / "vdmcheck2" / "vdmcheck-1.1.3" / "VDMCheck2.sh"
 
