@@ -42,6 +42,7 @@ from .recording import Recording
 from .significance import FALSE_DISCOVERY_RATE, NullNoise, benjamini_hochberg, null_z, p_value
 from .signals import folds as make_folds, kinematics, sample_windows, window_labels
 from .structure import HeldOutGain, Order, candidate_orders, held_out_gain_sq, order_search
+from .timebase import GAP_FACTOR
 
 MIN_SAMPLES = 500
 MIN_DURATION = 2.0
@@ -89,7 +90,7 @@ def check_recording(rec: Recording) -> None:
                              f"need at least {MIN_SAMPLES} samples and {MIN_DURATION} s)")
     dt = np.diff(rec.time)
     step = float(np.median(dt))
-    gaps = np.flatnonzero(dt > 10.0 * step)
+    gaps = np.flatnonzero(dt > GAP_FACTOR * step)  # the same rule as `hdjoint estimate`'s
     if len(gaps):
         g = gaps[0]
         raise DiagnosisError(f"{where}: a gap of {dt[g]:.4g} s after t = {rec.time[g]:.6g} s (line {g + 2}); "
