@@ -4,17 +4,15 @@ engine streams, so memory stays flat whatever the recording's length. The
 batch engine and the smoother need the whole recording at once."""
 from __future__ import annotations
 
-import json
 import sys
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from .jobs import UserError, check_output_file, read_params
 from .metrics import RunningErrorFigures
 from .recording import CHUNK_ROWS, CsvWriter, Recording, RecordingError, iter_recording
-from .timebase import TIME_UNITS, TimeBaseError, check_step, describe, irregular_steps
+from .timebase import TIME_UNITS, TimeBaseError, check_step, describe, given_ts, irregular_steps, sample_period
 
 FIGURES_OF = ("tau_compliance", "tau_ukf", "tau_hat")
 SHOWN_WARNINGS = 5
@@ -64,14 +62,14 @@ class TimedBlocks:
     every gap and jitter is refused with its line, or a gap splits the
     recording when asked (with a warning naming it)."""
 
-    def __init__(self, opts: Options, given_ts: float | None):
+    def __init__(self, opts: Options, ts_given: float | None):
         self.opts = opts
         self._blocks = self._read()
         self._first = next(self._blocks)
         while len(self._first.recording) < 2:  # only a file this short: read on, for its error
             self._first = next(self._blocks)
         self.step = float(np.median(np.diff(self._first.recording.time)))
-        self.ts = given_ts if given_ts is not None else float(f"{self.step:.6g}")
+        self.ts = sample_period(self.step, ts_given)
         self._guard(check_step, opts.recording, self.step, opts.time_unit, self.ts)
         self.gaps: list[str] = []
 
@@ -115,13 +113,6 @@ class TimedBlocks:
     def _chain(self):
         yield self._first
         yield from self._blocks
-
-
-def _given_ts(params_path) -> float | None:
-    if not params_path:
-        return None
-    given = json.loads(Path(params_path).read_text())  # read_params has validated it
-    return float(given["Ts"]) if "Ts" in given else None
 
 
 def _pieces(n: int, cuts: list[int]):
@@ -185,8 +176,8 @@ def estimate_to_file(opts: Options) -> dict:
     from . import parameters
     check_output_file(opts.output, inputs=(opts.recording, opts.params))  # before any work
     params = read_params(opts.params)
-    blocks = TimedBlocks(opts, _given_ts(opts.params))
-    ts_from_recording = _given_ts(opts.params) is None
+    blocks = TimedBlocks(opts, given_ts(opts.params))
+    ts_from_recording = given_ts(opts.params) is None
     if ts_from_recording:
         params["Ts"] = blocks.ts
     params = parameters.for_estimator(params)

@@ -4,7 +4,9 @@ jitter). The command line refuses what these find unless told otherwise;
 docs/robustness.md states the policy."""
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -21,6 +23,20 @@ GAP_FACTOR = 10.0
 JITTER_RTOL = 0.2
 # The recording's step and the parameters' Ts agree to this fraction.
 TS_RTOL = 0.01
+
+
+def given_ts(params_path) -> float | None:
+    """The sample period the parameter file sets, or None when it leaves Ts open."""
+    if not params_path:
+        return None
+    given = json.loads(Path(params_path).read_text())  # read_params has validated it
+    return float(given["Ts"]) if "Ts" in given else None
+
+
+def sample_period(median_step: float, given: float | None) -> float:
+    """The estimator's Ts: the parameter file's, else the recording's median
+    step (to 6 digits, so jitter in the last digits does not change it)."""
+    return given if given is not None else float(f"{median_step:.6g}")
 
 
 class TimeBaseError(ValueError):

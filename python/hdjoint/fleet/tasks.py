@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import contextlib
 import io
-import json
 import time
 import traceback
 from pathlib import Path
@@ -30,10 +29,9 @@ def _estimator_params(job: Job, rec) -> dict:
     """The estimator's parameter set; Ts from the recording unless the file sets it."""
     from .. import parameters
     from ..jobs import read_params
+    from ..timebase import given_ts, sample_period
     params = read_params(job.params)
-    given = json.loads(Path(job.params).read_text()) if job.params else {}
-    if "Ts" not in given:
-        params["Ts"] = float(f"{rec.median_step:.6g}")
+    params["Ts"] = sample_period(rec.median_step, given_ts(job.params))
     return parameters.for_estimator(params)
 
 
