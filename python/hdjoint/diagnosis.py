@@ -35,7 +35,7 @@ from scipy.stats import norm
 from threadpoolctl import threadpool_limits
 
 from . import parameters
-from .calibration import RESIZE_Z, Calibrated, Prior, posterior_std, priors
+from .calibration import RESIZE_Z, Calibrated, Prior, posterior_std, priors, robust_std
 from .channels import ESTIMATES, SMOOTHED_PARTS, Prepared, depends_on
 from .effects import ALWAYS_CALIBRATED, EFFECTS, Effect, calibrated_parameters, orthogonal_parameters, owner, testable
 from .recording import Recording
@@ -48,6 +48,9 @@ MIN_SAMPLES = 500
 MIN_DURATION = 2.0
 FIT_SAMPLES = 5000  # training samples a fit looks at (spread over all training blocks)
 FOLDS = 40  # contiguous blocks; even ones fit, odd ones are held out
+# Contiguous blocks over which the robust (sandwich) posterior compares the
+# data's scores: each far longer than the residual's correlation.
+SCORE_BLOCKS = 100
 # A longer recording is analysed in FOLDS windows spread over it, this long
 # in all: the diagnosis time then stops growing with the recording's length.
 ANALYSED_SECONDS = 120.0
@@ -183,7 +186,9 @@ class Fit:
     params: dict
     names: list[str]
     cost: float
-    std: dict = field(default_factory=dict)  # Laplace posterior std of each fitted parameter
+    std: dict = field(default_factory=dict)  # posterior std of each fitted parameter: the wider of the two below
+    std_laplace: dict = field(default_factory=dict)
+    std_robust: dict = field(default_factory=dict)
 
 
 @dataclass
@@ -347,8 +352,11 @@ class Diagnosis:
             return Fit(dict(x0_params), list(names), float("inf"))
         fitted = dict(x0_params)
         fitted.update(zip(names, sol.x * scale))
-        std = dict(zip(names, posterior_std(sol.jac, scale)))
-        return Fit(fitted, list(names), float(sol.cost), std)
+        laplace = posterior_std(sol.jac, scale)
+        blocks = np.tile(self.fit_index * SCORE_BLOCKS // len(self.rec), len(channels))
+        robust = robust_std(sol.jac, sol.fun, blocks, scale)
+        return Fit(fitted, list(names), float(sol.cost), dict(zip(names, np.maximum(laplace, robust))),
+                   dict(zip(names, laplace)), dict(zip(names, robust)))
 
     # ---- the steps -------------------------------------------------------------
     def reference_torque(self, p) -> np.ndarray:

@@ -196,7 +196,7 @@ def calibrated_parameters(part: str, nominal: dict, sensor: bool) -> list[str]:
         own = effect.params + effect.shape
         on = [n for n in effect.resizes if nominal.get(n, 0.0) and (n not in own or effect.is_on(nominal))]
         names += [n for n in (*effect.calibrates(nominal), *on) if n not in names]
-    return names
+    return list(dict.fromkeys(names))  # an effect's shape may also be a parameter it resizes: once each
 
 
 def owner(name: str) -> Effect | None:
