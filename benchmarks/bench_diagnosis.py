@@ -5,19 +5,26 @@ hour-long recording of the same joint, and the in-process diagnosis alone.
 The recordings are simulated once (the hour takes several minutes through
 the plant FMU; the hour is the paper's 58 s run repeated) and kept in build/bench/. Timings are wall-clock on this
 machine; the issue's goals are <= 20 s for 58 s and <= 5 min per hour.
+The in-process diagnosis is timed with its hypotheses fitted one after the
+other (workers=1) and side by side (one process per core), wall-clock and
+CPU (this process and its children). Writes docs/results/diagnosis_speed.md.
 Run: python benchmarks/bench_diagnosis.py [--hours 1] [--no-hour]
 """
 from __future__ import annotations
 
 import argparse
+import os
 import pathlib
 import subprocess
 import sys
 import tempfile
 import time
 
+from results import ResultsPage
+
 from hdjoint import experiments, parameters, recording
 from hdjoint.diagnosis import diagnose
+from hdjoint.forked import available_cores
 
 CACHE = pathlib.Path(__file__).resolve().parent.parent / "build" / "bench"
 
@@ -51,20 +58,31 @@ def main():
     CACHE.mkdir(parents=True, exist_ok=True)
     parameters.save(params, parameters.defaults())
 
+    page = ResultsPage("diagnosis_speed", "Diagnosis speed", "python benchmarks/bench_diagnosis.py")
+    page.say("| what | wall-clock | CPU (with children) |")
+    page.say("|---|---|---|")
     short = simulated("paper", 58.0)
     rec = recording.read_recording(short)
-    start = time.perf_counter()
-    _, doc = diagnose(rec, parameters.defaults())
-    inner = time.perf_counter() - start
-    print(f"58 s recording: diagnosis in-process {inner:.1f} s ({doc['verdict']}: "
-          f"{', '.join(f['effect'] for f in doc['findings']) or '-'})", flush=True)
-    print(f"58 s recording: hdjoint diagnose end to end {time_cli(short, params):.1f} s", flush=True)
+    for workers, label in ((1, "one after the other"), (None, f"side by side ({available_cores()} processes)")):
+        cpu, start = _cpu(), time.perf_counter()
+        _, doc = diagnose(rec, parameters.defaults(), workers=workers)
+        page.say(f"| 58 s recording, in-process, hypotheses {label} | {time.perf_counter() - start:.1f} s | "
+                 f"{_cpu() - cpu:.1f} s |")
+    page.say(f"| 58 s recording, `hdjoint diagnose` end to end | {time_cli(short, params):.1f} s | |")
 
     if not args.no_hour:
         long = simulated("paper_repeated", 3600.0 * args.hours)
         seconds = time_cli(long, params)
-        print(f"{args.hours:g} h recording: hdjoint diagnose end to end {seconds:.1f} s "
-              f"= {seconds / args.hours / 60:.2f} min per hour of recording")
+        page.say(f"| {args.hours:g} h recording, `hdjoint diagnose` end to end | {seconds:.1f} s "
+                 f"({seconds / args.hours / 60:.2f} min per hour) | |")
+    page.say(f"Verdict on the 58 s recording: {doc['verdict']} "
+             f"({', '.join(f['effect'] for f in doc['findings']) or 'no findings'}).")
+    page.write()
+
+
+def _cpu() -> float:
+    t = os.times()
+    return t.user + t.system + t.children_user + t.children_system
 
 
 if __name__ == "__main__":

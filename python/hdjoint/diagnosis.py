@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 import time as _time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
@@ -37,6 +37,7 @@ from threadpoolctl import threadpool_limits
 from . import parameters
 from .calibration import RESIZE_Z, Calibrated, Prior, posterior_std, priors, robust_std
 from .channels import ESTIMATES, SMOOTHED_PARTS, Prepared, depends_on
+from .forked import map_forked
 from .effects import ALWAYS_CALIBRATED, EFFECTS, Effect, calibrated_parameters, orthogonal_parameters, owner, testable
 from .recording import Recording
 from .significance import FALSE_DISCOVERY_RATE, NullNoise, benjamini_hochberg, null_z, p_value
@@ -256,7 +257,9 @@ class Diagnosis:
     """Runs the diagnosis of one or several recordings of a joint against a nominal parameter set."""
 
     def __init__(self, rec: Recording | list[Recording], nominal: dict[str, float],
-                 progress: Callable[[str], None] | None = None, tolerance: dict[str, float] | None = None):
+                 progress: Callable[[str], None] | None = None, tolerance: dict[str, float] | None = None,
+                 workers: int | None = None):
+        self.workers = workers  # processes that fit a round's hypotheses (None: one per core)
         recordings = list(rec) if isinstance(rec, (list, tuple)) else [rec]
         for r in recordings:
             check_recording(r)
@@ -484,6 +487,15 @@ class Diagnosis:
         hypothesis.p_raw = p_value(gain.z, z_null)
         return hypothesis
 
+    def _try_all(self, candidates: list[Effect], p: dict) -> list[Hypothesis]:
+        """Every candidate's hypothesis, fitted side by side (forked.py): the
+        same results as one after the other."""
+        def piece(i):
+            h = self._try(candidates[i], p)
+            return None if h is None else replace(h, effect=None)  # an Effect holds functions: not pickled
+        found = map_forked(piece, len(candidates), self.workers)
+        return [replace(h, effect=e) for h, e in zip(found, candidates) if h is not None]
+
     def _null_noise(self, p) -> NullNoise:
         return NullNoise(np.stack([np.where(self.used, np.nan_to_num(self.eval.residual(c, p) / self.sigma[c.name]),
                                             0.0) for c in self.channels]))
@@ -510,7 +522,7 @@ class Diagnosis:
         while candidates:
             self.say(f"testing {len(candidates)} hypotheses ({', '.join(e.id for e in candidates)})")
             self._noise = self._null_noise(p)
-            tried = [h for h in (self._try(e, p) for e in candidates) if h is not None]
+            tried = self._try_all(candidates, p)
             for h, adjusted in zip(tried, benjamini_hochberg([h.p_raw for h in tried])):
                 h.p_value = adjusted
             tried.sort(key=lambda h: -h.gain.gain)
@@ -596,19 +608,22 @@ def _finding_for(best: Hypothesis, others: list[Hypothesis]) -> Finding:
 
 
 def diagnose(rec: Recording | list[Recording], nominal: dict[str, float],
-             progress: Callable[[str], None] | None = None, tolerance: dict[str, float] | None = None):
+             progress: Callable[[str], None] | None = None, tolerance: dict[str, float] | None = None,
+             workers: int | None = None):
     """Run every step on one recording or several of the same joint (fitted
-    jointly); returns (the DiagnosisResult, the findings document)."""
+    jointly); returns (the DiagnosisResult, the findings document). The
+    hypotheses of each round are fitted by `workers` processes (None: one
+    per core; 1: in this process), with the same results."""
     # The linear algebra here is tall and thin (thousands of samples by a
     # dozen parameters): one BLAS thread is faster than several fighting
     # over two cores, by up to 7x measured on this machine under load.
     with threadpool_limits(limits=1, user_api="blas"):
-        return _diagnose(rec, nominal, progress, tolerance)
+        return _diagnose(rec, nominal, progress, tolerance, workers)
 
 
-def _diagnose(rec, nominal, progress, tolerance):
+def _diagnose(rec, nominal, progress, tolerance, workers):
     from .findings import document, remaining_structure
-    diag = Diagnosis(rec, nominal, progress, tolerance)
+    diag = Diagnosis(rec, nominal, progress, tolerance, workers)
     calibrated, diag.last_fit = diag.calibrate()
     diag.say("locating structure in the calibrated model's residuals")
     located = remaining_structure(diag, calibrated)

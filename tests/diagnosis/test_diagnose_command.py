@@ -139,3 +139,14 @@ def test_effects_without_excitation_are_reported_not_testable():
     _, doc = diagnose(rec, nominal_for(case))
     reasons = {n["effect"]: n["reason"] for n in doc["not_testable"]}
     assert "thermal_drift" in reasons and "not testable on this recording" in reasons["thermal_drift"]
+
+
+def test_hypotheses_fitted_side_by_side_give_the_same_diagnosis():
+    case = next(c for c in CASES if c.present == ("gravity_load",))
+    rec = record(case, duration=6.0)
+    docs = []
+    for workers in (1, 2):
+        _, doc = diagnose(rec, nominal_for(case), workers=workers)
+        doc.pop("seconds")
+        docs.append(json.dumps(doc, sort_keys=True, default=str))
+    assert docs[0] == docs[1]

@@ -1,0 +1,46 @@
+"""Independent pieces of one computation, side by side in forked processes.
+
+The diagnosis tries every hypothesis of a round on the same recording: each
+fit is independent and CPU-bound (the GIL would serialise threads). Forked
+children inherit the prepared recording and its caches without copying or
+pickling them; only each piece's result comes back. Where forking is not
+safe (a daemonic process such as a Dask worker, which may not have
+children, or a process running other threads, whose locks a child could
+inherit held) the pieces run one after the other, with the same results."""
+from __future__ import annotations
+
+import multiprocessing
+import os
+import threading
+from typing import Callable, TypeVar
+
+T = TypeVar("T")
+_piece: Callable[[int], object] | None = None  # what the forked children run, inherited
+
+
+def available_cores() -> int:
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+def can_fork() -> bool:
+    return (hasattr(os, "fork") and not multiprocessing.current_process().daemon
+            and threading.active_count() == 1)
+
+
+def _run(index: int):
+    return _piece(index)
+
+
+def map_forked(piece: Callable[[int], T], count: int, workers: int | None = None) -> list[T]:
+    """[piece(0), ..., piece(count - 1)], computed by up to `workers` forked
+    processes (None: one per available core). Results come back pickled."""
+    global _piece
+    workers = min(count, available_cores() if workers is None else workers)
+    if workers <= 1 or not can_fork():
+        return [piece(i) for i in range(count)]
+    _piece = piece
+    try:
+        with multiprocessing.get_context("fork").Pool(workers) as pool:
+            return pool.map(_run, range(count), chunksize=1)
+    finally:
+        _piece = None

@@ -1,0 +1,61 @@
+"""Pieces side by side in forked processes: the same results as one after
+the other, errors passed on, and no fork where it is not safe."""
+import multiprocessing
+import os
+import threading
+
+import pytest
+
+from hdjoint import forked
+
+
+def _pid_and_square(i):
+    return os.getpid(), i * i
+
+
+def test_results_in_order_and_from_other_processes():
+    out = forked.map_forked(_pid_and_square, 6, workers=2)
+    assert [v for _, v in out] == [i * i for i in range(6)]
+    assert {pid for pid, _ in out} - {os.getpid()}, "no piece ran in a child"
+
+
+def test_closures_over_unpicklable_state_run_in_children():
+    # The diagnosis's pieces close over the prepared recording (never pickled).
+    state = {"lock": threading.Lock(), "values": [3, 1, 4, 1, 5]}
+    assert forked.map_forked(lambda i: state["values"][i] * 2, 5, workers=2) == [6, 2, 8, 2, 10]
+
+
+def test_an_error_in_a_piece_reaches_the_caller():
+    def piece(i):
+        if i == 3:
+            raise ValueError("piece 3 failed")
+        return i
+    with pytest.raises(ValueError, match="piece 3 failed"):
+        forked.map_forked(piece, 5, workers=2)
+
+
+def test_no_fork_while_other_threads_run():
+    stop = threading.Event()
+    other = threading.Thread(target=stop.wait)
+    other.start()
+    try:
+        assert not forked.can_fork()
+        out = forked.map_forked(_pid_and_square, 4, workers=2)
+        assert {pid for pid, _ in out} == {os.getpid()}
+    finally:
+        stop.set()
+        other.join()
+
+
+def _inside_daemon(queue):
+    queue.put((forked.can_fork(), forked.map_forked(lambda i: i + 1, 3, workers=2)))
+
+
+def test_a_daemonic_process_runs_its_pieces_itself():
+    # A Dask worker is daemonic: it may not have children.
+    queue = multiprocessing.get_context("fork").Queue()
+    child = multiprocessing.get_context("fork").Process(target=_inside_daemon, args=(queue,), daemon=True)
+    child.start()
+    can, out = queue.get(timeout=60)
+    child.join()
+    assert can is False and out == [1, 2, 3]
