@@ -3,20 +3,22 @@ README): what each recording contains (and so what it can say), the
 verdict and findings, where the kinematic error (the thesis' dominant
 effect) ends up, and the torsion residual on ANOTHER recording of the same
 joint before and after (validation.validate, as `hdjoint diagnose
---validate`, with each set's encoder zero a0 placed on that recording). Joint 1 has two
-recordings, each validated on the other; joints 2 and 3 have one, so each is
-diagnosed on its first half and validated on its second half (said so in
-the table).
+--validate`, which places each set's encoder zero a0 on that recording).
+Joint 1 has two recordings, each validated on the other; joints 2 and 3
+have one, so each is diagnosed on its first half and validated on its
+second half (said so in the table).
 
-The nominal set per joint: the contract defaults with the README's
-Kt = 0.1 N.m/A, the gear ratio fitted to the two encoders, the catalogue
-stiffness of a size-25 gear (K1 = 31000 N.m/rad; Cf from K1/K2 at T1/T2
-through eq. (5)), and no gravity (mgl = 0: the diagnosis may add it).
+The recordings are read with the current in the encoders' sense
+(CURRENT_SIGN) and the gears' tooth ratios (TOOTH_RATIO). The nominal set
+per joint: the contract defaults with the README's Kt = 0.1 N.m/A, the
+catalogue stiffness of a size-25 gear (K1 = 31000 N.m/rad; Cf from K1/K2 at
+T1/T2 through eq. (5)), and no gravity (mgl = 0: the diagnosis may add it).
 Run: python benchmarks/lara8_table.py [--data DIR]  -> docs/results/lara8.md
 """
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import sys
@@ -31,7 +33,6 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from diagnosis_independent import _commit, _machine  # noqa: E402  (the same stamp on every table)
 
 from hdjoint import parameters  # noqa: E402
-from hdjoint.diagnosis import Diagnosis  # noqa: E402
 from hdjoint.effects import KINEMATIC_EQ7  # noqa: E402
 from hdjoint.jobs import UserError, diagnose_to_directory  # noqa: E402
 from hdjoint.recording import read_recording, write_recording  # noqa: E402
@@ -39,12 +40,24 @@ from hdjoint.signals import kinematics  # noqa: E402
 from hdjoint.validation import validate  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-# ../shared/data/lara8 beside the main checkout (a worktree sits one level deeper).
+# ../shared/data/lara8 beside the main checkout (a worktree sits one level deeper); the copy the
+# tests carry (tests/data/lara8, the same files) where that is absent (CI).
 DATA = next((d for d in (ROOT.parent / "shared/data/lara8", ROOT.parent.parent / "shared/data/lara8") if d.is_dir()),
-            ROOT.parent / "shared/data/lara8")
+            ROOT / "tests/data/lara8")
 TABLE = ROOT / "docs" / "results" / "lara8.md"
 KT = 0.1                          # N.m/A, the README's convention for these files
 K1, K2, T1, T2 = 31000.0, 50000.0, 14.0, 48.0  # catalogue, size-25 gear (thesis)
+# The gears' exact ratios (whole numbers of teeth: circular-spline output of a 120:1 / 100:1 flexspline
+# runs at 121:1 / 101:1; examples/lara8/README.md). The encoders' least-squares slope differs from them
+# by up to 0.14 % because it also absorbs whatever torsion drifts with the link angle (gravity, link-order
+# kinematic error): fitting N to the encoders hides that torsion from the diagnosis.
+TOOTH_RATIO = {"joint1": 121, "joint2": 121, "joint3": 101}
+# The files' current has the robot's joint-torque sign, their encoders their own counting direction:
+# the source log's link encoders of joints 1 and 2 count against the robot's joint angle (-2^24/(2 pi)
+# counts per rad of `joint_angles_k`), joint 3's with it. CONTRACT.md wants positive torque to drive
+# the encoders positive, so joints 1 and 2 are read with i_m negated (docs/diagnosis.md, "Real data":
+# the motor inertia comes out negative otherwise).
+CURRENT_SIGN = {"joint1": -1.0, "joint2": -1.0, "joint3": 1.0}
 JOINTS = {"joint1": ["joint1_jog.csv", "joint1_jog_linear_mass.csv"], "joint2": ["joint2_jog_joint_mass.csv"],
           "joint3": ["joint3_jog_linear_mass.csv"]}
 
@@ -53,6 +66,12 @@ def catalogue_cf() -> float:
     """Cf of eq. (5) through the catalogue's torsion at T2 (piecewise K1, K2), with Kf = K1."""
     torsion_t2 = T1 / K1 + (T2 - T1) / K2
     return brentq(lambda cf: math.atan(cf * T2) / (cf * K1) - torsion_t2, 1e-6, 10.0)
+
+
+def read_joint(path: Path):
+    """A LARA8 recording with its current in the encoders' sense (CURRENT_SIGN)."""
+    rec = read_recording(path)
+    return dataclasses.replace(rec, i_m=CURRENT_SIGN[path.name.split("_")[0]] * rec.i_m)
 
 
 def gear_ratio(rec) -> float:
@@ -96,14 +115,8 @@ def nominal_for(n: float) -> dict:
     return dict(parameters.defaults(), N=n, Kt=KT, Kf=K1, Cf=catalogue_cf(), mgl=0.0)
 
 
-def validate_with_own_zero(rec, nominal: dict, calibration: dict, corrected: dict) -> dict:
-    """validation.validate on another recording, each set's a0 placed on that
-    recording first: the encoders' zeros are arbitrary per recording (README),
-    and `hdjoint diagnose --validate` keeps a0, which puts these recordings'
-    torsion past eq. (8)'s pole (all residuals NaN: it fails)."""
-    calibrated = dict(nominal, **{k: _estimate(v) for k, v in calibration.items()})
-    sets = [Diagnosis(rec, p).initial_offset(p) for p in (nominal, calibrated, corrected)]
-    return validate(rec, *sets)
+def calibrated_set(nominal: dict, calibration: dict) -> dict:
+    return dict(nominal, **{k: _estimate(v) for k, v in calibration.items()})
 
 
 def halves(rec):
@@ -122,13 +135,14 @@ def run_joint(joint: str, files: list[str], data: Path, tmp: Path) -> list[dict]
     """Each recording diagnosed whole; its corrected set validated on the joint's
     other recording, or (a joint with one recording) the diagnosis of its first
     half validated on its second half."""
-    recs = [read_recording(data / f) for f in files]
+    recs = [read_joint(data / f) for f in files]
+    n = TOOTH_RATIO[joint]
     rows = []
     for k, (name, rec) in enumerate(zip(files, recs)):
-        n = gear_ratio(rec)
         doc = _diagnose(rec, n, tmp, f"{joint}-{k}")
         calibration = doc.get("calibration", {})
-        row = {"joint": joint, "recording": name, "N_fitted": round(n, 3), "contents": contents(rec, n),
+        row = {"joint": joint, "recording": name, "N": n, "N_encoders": round(gear_ratio(rec), 3),
+               "contents": contents(rec, n),
                "verdict": doc["verdict"],
                "findings": [{"effect": f["effect"], "kind": f.get("kind", "added"),
                              "orders": {key: v for key, v in f["parameters"].items() if key.endswith("_order")}}
@@ -149,7 +163,7 @@ def run_joint(joint: str, files: list[str], data: Path, tmp: Path) -> list[dict]
                 row["validated_on"] = f"none: only one recording of this joint, and its first half is {reason}"
                 other = None
         if other is not None:
-            row["validation"] = [validate_with_own_zero(other, nominal_for(n), calibration, doc["params"])]
+            row["validation"] = [validate(other, nominal_for(n), calibrated_set(nominal_for(n), calibration), doc["params"])]
         rows.append(row)
         print(f"{name}: {row['verdict']} {[f['effect'] for f in row['findings']]}", flush=True)
     return rows
@@ -164,7 +178,9 @@ def write_table(rows: list[dict], path: Path = TABLE) -> str:
     lines = ["# The diagnosis on the real LARA8 recordings", "",
              f"Generated by `python benchmarks/lara8_table.py` on {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC, "
              f"commit {_commit()}, machine {_machine()}.",
-             f"Nominal set: contract defaults with Kt = {KT}, N fitted to the encoders, Kf = K1 = {K1:g} N.m/rad, "
+             f"Recordings read with the current's sign turned to the encoders' (joints 1 and 2) and N the tooth ratio "
+             f"(121 / 101; the encoders' least-squares slope is given beside it). "
+             f"Nominal set: contract defaults with Kt = {KT}, Kf = K1 = {K1:g} N.m/rad, "
              f"Cf = {catalogue_cf():.4f} 1/(N.m) (catalogue K1/K2 at T1/T2 through eq. (5)), mgl = 0.", "",
              "## What each recording contains", "",
              "| recording | s | samples | step (ms) | motor rev | link travel (rad) | motor / link reversals | "
@@ -176,7 +192,7 @@ def write_table(rows: list[dict], path: Path = TABLE) -> str:
                      f"{c['link_reversals']} | {c['torque_range_Nm'][0]} .. {c['torque_range_Nm'][1]} | "
                      f"{'; '.join(c['cannot_say']) or '-'} |")
     lines += ["", "## Verdict, the kinematic error, and the torsion residual on another recording", "",
-              "| recording | N fitted | verdict | findings (kind, orders) | eq. (7) coefficients: nominal -> calibrated "
+              "| recording | N (encoders' slope) | verdict | findings (kind, orders) | eq. (7) coefficients: nominal -> calibrated "
               "(x nominal) | validated on | residual RMS on it, N.m: nominal -> calibrated -> corrected |",
               "|---|---|---|---|---|---|---|"]
     for r in rows:
@@ -186,7 +202,7 @@ def write_table(rows: list[dict], path: Path = TABLE) -> str:
                         for k, v in r["kinematic_calibration"].items() if v["nominal"]) or "not calibrated"
         val = "; ".join(f"{ch}: {row['nominal']['rms']:.3f} -> {row['calibrated']['rms']:.3f} -> "
                         f"{row['corrected']['rms']:.3f}" for v in r["validation"] for ch, row in v["channels"].items())
-        lines.append(f"| {r['recording']} | {r['N_fitted']} | {r['verdict']} | {found} | {kin} | "
+        lines.append(f"| {r['recording']} | {r['N']} ({r['N_encoders']}) | {r['verdict']} | {found} | {kin} | "
                      f"{r['validated_on']} | {val or '-'} |")
     kinematic = [r for r in rows if any(f["effect"] == "kinematic_error" for f in r["findings"])]
     lines += ["", f"Kinematic error named (added or resized): {len(kinematic)} of {len(rows)} diagnoses. "

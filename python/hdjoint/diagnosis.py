@@ -97,6 +97,30 @@ def check_recording(rec: Recording) -> None:
                              f"the median step is {step:.4g} s. Split the recording at its gaps.")
 
 
+def eq7_orders(p: dict) -> dict[str, tuple[float, ...]]:
+    """The angle orders eq. (7) already models in `p`: only those whose
+    coefficients are nonzero. A nominal set without a kinematic-error model
+    (all zero, as a catalogue gives no phase) must leave them to the order
+    search, or the wave generator's two-lobe error can never be found."""
+    terms = {"theta_m": ((p["omega_w"], ("aw1", "bw1")), (2 * p["omega_w"], ("aw2", "bw2"))),
+             "theta_l": ((p["omega_l"], ("al1", "bl1")),)}
+    return {angle: tuple(order for order, names in pairs if any(p.get(n, 0.0) for n in names))
+            for angle, pairs in terms.items()}
+
+
+def place_offset(rec: Recording, p: dict, reference_torque: np.ndarray) -> dict:
+    """`p` with a0 placed so the transmission's median torsion on `rec` matches
+    the reference torque's: encoder zeros are arbitrary per recording (power
+    cycles, multi-turn counts), and a0 from another recording can put the
+    torsion past eq. (8)'s pole, where every residual is NaN."""
+    from . import _core
+    est = _core.compliance(parameters.for_estimator(p), rec.i_m, rec.theta_m, rec.theta_l)
+    cf, kf = p["Cf"], p["Kf"]
+    ref_torsion = np.arctan(cf * reference_torque) / (cf * kf) if cf > 1e-12 else reference_torque / kf
+    shift = float(np.nanmedian(est["dtheta_f"] - ref_torsion))
+    return dict(p, a0=p["a0"] + shift)
+
+
 def joined(recordings: list[Recording]) -> tuple[Recording, np.ndarray, np.ndarray, np.ndarray]:
     """Several recordings of one joint as one analysed recording: each one's
     analysed windows, one after the other on a continuous time axis. Returns
@@ -355,15 +379,7 @@ class Diagnosis:
         return self.rec.tau_sensor if self.has_sensor else self.eval.estimate("motor", p)
 
     def initial_offset(self, p) -> dict:
-        """Place a0 so the transmission's median torsion matches the reference
-        torque's: encoder zeros are arbitrary, and a singular start helps no fit."""
-        from . import _core
-        est = _core.compliance(parameters.for_estimator(p), self.rec.i_m, self.rec.theta_m, self.rec.theta_l)
-        ref = self.reference_torque(p)
-        cf, kf = p["Cf"], p["Kf"]
-        ref_torsion = np.arctan(cf * ref) / (cf * kf) if cf > 1e-12 else ref / kf
-        shift = float(np.nanmedian(est["dtheta_f"] - ref_torsion))
-        return dict(p, a0=p["a0"] + shift)
+        return place_offset(self.rec, p, self.reference_torque(p))
 
     def _update_noise(self, p) -> None:
         """Noise scales per channel (they equalise the channels: smoothed ones
@@ -396,8 +412,7 @@ class Diagnosis:
         (orders the nominal model already has at that angle excluded)."""
         r = self.eval.residual(channel, p)
         smoothed = self.prep.kin.smooth if part in SMOOTHED_PARTS else None
-        existing = {"theta_m": (p["omega_w"], 2 * p["omega_w"]), "theta_l": (p["omega_l"],)} \
-            if part == "transmission" else {}
+        existing = eq7_orders(p) if part == "transmission" else {}
         found = []
         for angle in angles:
             values = getattr(self.rec, angle)
