@@ -8,6 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from hdjoint.cases import CASES, nominal_for, record, truth_for
+from hdjoint.diagnosis import diagnose
 from hdjoint.validation import validate
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
@@ -30,3 +32,21 @@ def test_validation_places_each_sets_encoder_zero_on_the_other_recording():
         for label, figures in row.items():
             assert np.isfinite(figures["rms"]), (name, label)
             assert figures["rms"] == pytest.approx(as_logged["channels"][name][label]["rms"], rel=1e-3)
+
+
+@pytest.mark.slow
+def test_a_kinematic_error_the_nominal_set_lacks_is_added_at_the_wave_generators_order():
+    """A nominal set without a kinematic-error model (eq. (7) all zero, as
+    examples/lara8 ships: a catalogue gives the error's size, not its phase).
+    The order search used to skip eq. (7)'s orders 2 and 4 of theta_m even
+    then, so the two-lobe error could not be added; `bl1` was resized instead."""
+    control = next(c for c in CASES if not c.present)
+    case = dataclasses.replace(control, name="no kinematic-error model",
+                               nominal_off={"aw1": 0.0, "bw1": 0.0, "aw2": 0.0, "bw2": 0.0})
+    _, doc = diagnose(record(case, 12.0), nominal_for(case))
+    first = doc["findings"][0]
+    assert (first["effect"], first["kind"]) == ("kinematic_error", "added")
+    slot = next(s for s in ("ke_m1", "ke_m2") if first["parameters"].get(f"{s}_order") == 2.0)
+    truth = truth_for(control)
+    assert first["parameters"][f"{slot}_a"] == pytest.approx(truth["aw1"], rel=0.15)
+    assert first["parameters"][f"{slot}_b"] == pytest.approx(truth["bw1"], rel=0.15)
