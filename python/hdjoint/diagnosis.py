@@ -265,6 +265,7 @@ class DiagnosisResult:
     sigma: dict[str, float]
     located: list[dict] = field(default_factory=list)
     unexplained: list[dict] = field(default_factory=list)
+    orders_not_found: list[dict] = field(default_factory=list)
 
     @property
     def beyond_tolerance(self) -> list[Calibrated]:
@@ -306,6 +307,8 @@ class Diagnosis:
         self.calibrated_names: list[str] = []
         self._added_names: list[str] = []  # parameters of accepted findings
         self.not_testable: list[dict] = []
+        self.orders_not_found: list[dict] = []  # effects at angle orders whose order search found none
+        self._orders_seen: list[Order] = []
         self.tested: list[list[dict]] = []  # every hypothesis tried, per round (evidence for the report)
 
     def shown_residual(self, channel: Channel, p: dict) -> np.ndarray:
@@ -414,12 +417,27 @@ class Diagnosis:
         smoothed = self.prep.kin.smooth if part in SMOOTHED_PARTS else None
         existing = eq7_orders(p) if part == "transmission" else {}
         found = []
+        self._orders_seen = []
         for angle in angles:
             values = getattr(self.rec, angle)
             found += order_search(values, r, self.fold, self.train, self.test,
                                   candidate_orders(angle, np.ptp(values)), existing.get(angle, ()), angle,
-                                  through=smoothed if angle == "theta_m" else None)
+                                  through=smoothed if angle == "theta_m" else None, seen=self._orders_seen)
         return found
+
+    def _no_order_found(self, effect: Effect, channel: Channel) -> None:
+        """Say why an effect at angle orders was not tested: no order passed the
+        order search (the strongest ones, with their held-out evidence)."""
+        if any(n["effect"] == effect.id for n in self.orders_not_found):
+            return  # said in the first round
+        travel = {a: round(float(np.ptp(getattr(self.rec, a))) / (2 * math.pi), 3) for a in effect.order_angles}
+        strongest = sorted(self._orders_seen, key=lambda o: -o.gain.z)[:3]
+        self.orders_not_found.append({
+            "effect": effect.id, "channel": channel.name, "revolutions": travel,
+            "strongest": [{"angle": o.angle, "order": o.order, "amplitude": round(o.amplitude, 5),
+                           "held_out_gain": round(o.gain.gain, 4), "z": round(o.gain.z, 2),
+                           "prominence": round(o.prominence, 2)} for o in strongest],
+            "reason": _why_no_order(effect, channel, strongest[0] if strongest else None)})
 
     def _anchors(self, part: str, stateful: bool = False) -> list[str]:
         """The calibrated parameters of `part`, refitted with every hypothesis
@@ -467,6 +485,8 @@ class Diagnosis:
         trial, names, orders = effect.candidates(
             effect, p, lambda q, angles: self.order_search(q, effect.part, channels[0], angles))
         if not names:
+            if effect.order_angles:
+                self._no_order_found(effect, channels[0])
             return None
         anchors = self._anchors(effect.part, effect.stateful)
         names_all = names + [a for a in anchors if a not in names]
@@ -578,6 +598,18 @@ class Diagnosis:
         return sorted(out, key=lambda f: f.p_value)
 
 
+def _why_no_order(effect: Effect, channel: Channel, strongest: Order | None) -> str:
+    why = ("no order of " + " or ".join(effect.order_angles) + " has a significant held-out gain (z > 3, "
+           "gain > 0.5 %) standing out of the spectrum (prominence > 3)")
+    if strongest is None:
+        return why + "; the angles cover too few periods for any order"
+    head = f"; the strongest, {strongest.angle} order {strongest.order:g} (z = {strongest.gain.z:.1f}),"
+    if strongest.prominence <= 3.0:
+        return why + (f"{head} is {strongest.prominence:.2g} times its neighbouring off-orders: broadband "
+                      f"structure in the {channel.name} residual, not a ripple")
+    return why + f"{head} stands out of the spectrum but predicts too little held out"
+
+
 def _separated(best: Hypothesis, rival: Hypothesis) -> bool:
     """The better hypothesis explains clearly more held-out structure than the rival, fold by fold."""
     d = best.gain.fold_gains - rival.gain.fold_gains
@@ -624,7 +656,7 @@ def _diagnose(rec, nominal, progress, tolerance):
     diag.say("checking what remains")
     result = DiagnosisResult(diag, dict(diag.nominal), dict(calibrated), p, added + diag.resized(calibration, p),
                              calibration, diag.tested, diag.not_testable, dict(diag.sigma), located,
-                             remaining_structure(diag, p))
+                             remaining_structure(diag, p), diag.orders_not_found)
     doc = document(result)
     if doc["unexplained"]:  # open-library fallback: propose terms for what no named effect explains
         from .open_library import propose_terms
