@@ -160,6 +160,7 @@ def run_joint(joint: str, files: list[str], data: Path, tmp: Path) -> list[dict]
                              "orders": {key: v for key, v in f["parameters"].items() if key.endswith("_order")}}
                             for f in doc["findings"]],
                "kinematic_calibration": {key: calibration[key] for key in KINEMATIC_EQ7 if key in calibration},
+               "kinematic_error_says": kinematic_error_says(doc),
                "proposed_terms": doc.get("proposed_terms", []), "seconds": doc.get("seconds"), "validation": []}
         if len(recs) > 1:
             other = recs[1 - k]
@@ -167,6 +168,10 @@ def run_joint(joint: str, files: list[str], data: Path, tmp: Path) -> list[dict]
         else:
             first, other = halves(rec)
             row["validated_on"] = f"second half of {name} (diagnosed on its first half)"
+            turns = float(np.ptp(first.theta_m)) / (2 * math.pi)
+            if turns < 1.0:
+                row["validated_on"] += (f"; that half stands still ({turns:.3f} motor revolutions at one load): what "
+                                        "it calibrates is extrapolated on the moving second half")
             try:
                 doc = _diagnose(first, n, tmp, f"{joint}-{k}-half")
                 calibration = doc.get("calibration", {})
@@ -179,6 +184,26 @@ def run_joint(joint: str, files: list[str], data: Path, tmp: Path) -> list[dict]
         rows.append(row)
         print(f"{name}: {row['verdict']} {[f['effect'] for f in row['findings']]}", flush=True)
     return rows
+
+
+def kinematic_error_says(doc: dict) -> str:
+    """What the diagnosis says about the kinematic error, in one phrase."""
+    for f in doc["findings"]:
+        if f["effect"] == "kinematic_error":
+            return f"{f.get('kind')} (p = {f.get('p_value', 1.0):.2g})"
+    zs = {n: c["z"] for n, c in doc.get("calibration", {}).items() if n in KINEMATIC_EQ7}
+    within = f"eq. (7) within tolerance (largest abs(z) {max(abs(z) for z in zs.values()):.1f}, resized needs 3)" \
+        if zs else "eq. (7) not calibrated"
+    said = next((n for n in doc.get("orders_not_found", []) if n["effect"] == "kinematic_error"), None)
+    if said and said["strongest"]:
+        o = said["strongest"][0]
+        return (f"not named: {within}; no added order: strongest {o['angle']} order {o['order']:g}, held-out z "
+                f"{o['z']}, prominence {o['prominence']} (needs 3 and 3)")
+    tested = [h for r in doc.get("hypotheses_tested", []) for h in r if h["effect"] == "kinematic_error"]
+    if tested:
+        return f"not named: {within}; tested, held-out z {tested[0]['z']}, p = {tested[0]['p_value']:.2g}"
+    untestable = next((n["reason"] for n in doc.get("not_testable", []) if n["effect"] == "kinematic_error"), "")
+    return f"not named: {within}; {untestable or 'no order searched'}"
 
 
 def _estimate(entry: dict):
@@ -204,9 +229,9 @@ def write_table(rows: list[dict], path: Path = TABLE) -> str:
                      f"{c['link_reversals']} | {c['torque_range_Nm'][0]} .. {c['torque_range_Nm'][1]} | "
                      f"{'; '.join(c['cannot_say']) or '-'} |")
     lines += ["", "## Verdict, the kinematic error, and the torsion residual on another recording", "",
-              "| recording | N (encoders' slope) | verdict | findings (kind, orders) | eq. (7) coefficients: nominal -> calibrated "
-              "(x nominal) | validated on | residual RMS on it, N.m: nominal -> calibrated -> corrected |",
-              "|---|---|---|---|---|---|---|"]
+              "| recording | N (encoders' slope) | verdict | findings (kind, orders) | kinematic error | eq. (7) coefficients: "
+              "nominal -> calibrated (x nominal) | validated on | residual RMS on it, N.m: nominal -> calibrated -> "
+              "corrected |", "|---|---|---|---|---|---|---|---|"]
     for r in rows:
         found = "; ".join(f"{f['effect']} ({f['kind']}" + (f", orders {f['orders']}" if f["orders"] else "") + ")"
                           for f in r["findings"]) or "-"
@@ -214,7 +239,8 @@ def write_table(rows: list[dict], path: Path = TABLE) -> str:
                         for k, v in r["kinematic_calibration"].items() if v["nominal"]) or "not calibrated"
         val = "; ".join(f"{ch}: {row['nominal']['rms']:.3f} -> {row['calibrated']['rms']:.3f} -> "
                         f"{row['corrected']['rms']:.3f}" for v in r["validation"] for ch, row in v["channels"].items())
-        lines.append(f"| {r['recording']} | {r['N']} ({r['N_encoders']}) | {r['verdict']} | {found} | {kin} | "
+        lines.append(f"| {r['recording']} | {r['N']} ({r['N_encoders']}) | {r['verdict']} | {found} | "
+                     f"{r['kinematic_error_says']} | {kin} | "
                      f"{r['validated_on']} | {val or '-'} |")
     kinematic = [r for r in rows if any(f["effect"] == "kinematic_error" for f in r["findings"])]
     lines += ["", f"Kinematic error named (added or resized): {len(kinematic)} of {len(rows)} diagnoses. "
