@@ -225,6 +225,7 @@ def document(result) -> dict:
         "calibration": {n: c.as_dict() for n, c in result.calibration.items()},
         "beyond_tolerance": [c.name for c in result.beyond_tolerance],
         "not_testable": result.not_testable,
+        "orders_not_found": result.orders_not_found,
         "hypotheses_tested": result.tested,
         "false_discovery_rate": FALSE_DISCOVERY_RATE,
         "unexplained": result.unexplained,

@@ -127,12 +127,13 @@ def _harmonic_coefficients(basis, residual, rows):
 
 
 def order_search(angle, residual, fold, train, test, orders, exclude=(), name="theta_m",
-                 max_orders: int = 2, through=None) -> list[Order]:
+                 max_orders: int = 2, through=None, seen: list | None = None) -> list[Order]:
     """Angle-synchronous analysis: least-squares power of the residual at each
     candidate order of `angle`; an order counts when its held-out gain is
     significant and it stands out of the spectrum (off-orders, at +1/4,
     give the floor that broadband structure and noise produce). `through`:
-    the smoothing filter the residual channel sees the world through."""
+    the smoothing filter the residual channel sees the world through;
+    `seen`: a list that receives every order evaluated, significant or not."""
     ok = np.isfinite(residual)
     res = np.where(ok, residual, 0.0)
     train, test = train & ok, test & ok
@@ -148,5 +149,7 @@ def order_search(angle, residual, fold, train, test, orders, exclude=(), name="t
         floor = np.median([np.hypot(*_harmonic_coefficients(_basis(angle, k + d, through), res, floor_rows)[:2])
                            for d in (-0.27, 0.23, 0.31)])
         found.append(Order(name, float(k), amp, held_out_gain(res, pred, fold, test), amp / max(floor, 1e-300)))
+    if seen is not None:
+        seen.extend(found)
     good = [o for o in found if o.gain.significant and o.prominence > 3.0]
     return sorted(good, key=lambda o: -o.gain.gain)[:max_orders]

@@ -4,13 +4,14 @@ Held-out folds show that a finding predicts the part of the recording it
 was not fitted on; another recording of the same joint (another day, another
 trajectory) is the stronger test. For each one the residual channels are
 evaluated with the nominal, the calibrated (no findings) and the corrected
-parameter sets, and, where it has a torque sensor, the torque estimators'
+parameter sets, each with its encoder offset a0 placed on that recording
+(the encoders' zeros are arbitrary per recording), and, where it has a torque sensor, the torque estimators'
 error with the nominal and the corrected sets.
 """
 from __future__ import annotations
 
 from .channels import Prepared
-from .diagnosis import Evaluator, channels_for, check_recording
+from .diagnosis import Evaluator, channels_for, check_recording, place_offset
 from .findings import estimator_comparison
 from .metrics import error_figures
 from .recording import Recording
@@ -32,7 +33,9 @@ def validate(rec: Recording, nominal: dict, calibrated: dict, corrected: dict) -
     prep = Prepared(rec, kinematics(rec), rec.time - rec.time[0])
     channels = channels_for(rec.tau_sensor is not None)
     evaluator = Evaluator(prep, channels)
-    sets = {"nominal": nominal, "calibrated": calibrated, "corrected": corrected}
+    sets = {label: place_offset(rec, p, rec.tau_sensor if rec.tau_sensor is not None else
+                                evaluator.estimate("motor", p))
+            for label, p in (("nominal", nominal), ("calibrated", calibrated), ("corrected", corrected))}
     figures = {}
     for c in channels:
         row = {}
@@ -41,7 +44,7 @@ def validate(rec: Recording, nominal: dict, calibrated: dict, corrected: dict) -
             row[label] = {"rms": round(f.rms, 5), "max": round(f.max, 5)}
         figures[c.name] = row
     return {"path": rec.path, "duration": round(rec.duration, 3), "channels": figures,
-            "estimator": estimator_comparison(_Source(rec, nominal), corrected)}
+            "estimator": estimator_comparison(_Source(rec, sets["nominal"]), sets["corrected"])}
 
 
 def summary_line(entry: dict) -> str:
