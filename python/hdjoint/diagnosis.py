@@ -540,10 +540,14 @@ class Diagnosis:
         """Every candidate's hypothesis, fitted side by side (forked.py): the
         same results as one after the other."""
         def piece(i):
+            said = len(self.orders_not_found)
             h = self._try(candidates[i], p)
-            return None if h is None else replace(h, effect=None)  # an Effect holds functions: not pickled
+            # An Effect holds functions: not pickled. What _try noted comes back with it.
+            return None if h is None else replace(h, effect=None), self.orders_not_found[said:]
         found = map_forked(piece, len(candidates), self.workers)
-        return [replace(h, effect=e) for h, e in zip(found, candidates) if h is not None]
+        for _, notes in found:  # a forked child's notes reach this process only here
+            self.orders_not_found += [n for n in notes if n not in self.orders_not_found]
+        return [replace(h, effect=e) for (h, _), e in zip(found, candidates) if h is not None]
 
     def _null_noise(self, p) -> NullNoise:
         return NullNoise(np.stack([np.where(self.used, np.nan_to_num(self.eval.residual(c, p) / self.sigma[c.name]),
