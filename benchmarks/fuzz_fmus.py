@@ -78,6 +78,8 @@ def write_report(out: Path) -> str:
     for name, s in records.items():
         lines += [f"- **{name}, {c}** ({len(r['calls'])} calls{', minimised' if r['minimised'] else ''}, "
                   f"seed {r['seed']}): {r['finding']}" for c, r in s["reproducers"].items()]
+    if not any(s["reproducers"] for s in records.values()):
+        lines.append("None: no finding of any kind.")
     text = "\n".join(lines) + "\n"
     (out / "fuzz.md").write_text(text)
     return text
