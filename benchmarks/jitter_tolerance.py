@@ -7,23 +7,20 @@ in +-JITTER*1ms/2, so consecutive steps are off by up to JITTER of the step
 (what the time-base check measures). Each is estimated (FMU engine, Ts 1 ms,
 the inputs held between rows) and its torque errors against the sensor are
 compared with those of the unjittered recording. Writes
-docs/results/jitter_tolerance.md.
+docs/results/jitter_tolerance.md (benchmarks/results.py).
 
 Run: python benchmarks/jitter_tolerance.py [--duration 10] [--seeds 3]
 """
 from __future__ import annotations
 
 import argparse
-import datetime
-import os
-import platform
 import sys
 import tempfile
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
+from results import ResultsPage
 FINE_STEP = 2e-5
 STEP = 1e-3
 JITTERS = (0.0, 0.1, 0.2, 0.3, 0.5, 0.8)
@@ -47,7 +44,6 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration", type=float, default=10.0)
     ap.add_argument("--seeds", type=int, default=3)
-    ap.add_argument("--out", type=Path, default=ROOT / "docs" / "results")
     args = ap.parse_args(argv)
     fine = experiments.run("paper", sample_time=FINE_STEP, duration=args.duration)
     rms = {j: {name: [] for name in ESTIMATES} for j in JITTERS}
@@ -66,22 +62,20 @@ def main(argv=None) -> int:
                 print(f"jitter {jitter}: steps up to {worst:.0%} off; "
                       + ", ".join(f"{n} {rms[jitter][n][-1]:.4f}" for n in ESTIMATES), file=sys.stderr, flush=True)
     base = {name: rms[0.0][name][0] for name in ESTIMATES}
-    lines = ["# What timing jitter costs `hdjoint estimate --allow-jitter` (benchmarks/jitter_tolerance.py)", "",
-             f"{datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC, {platform.machine()}, "
-             f"{os.cpu_count()} cores (shared), Python {platform.python_version()}; the paper experiment, "
-             f"{args.duration:g} s simulated on a {FINE_STEP * 1e6:g} µs grid, rows taken at k·1 ms + u_k with "
-             f"steps up to the given fraction of 1 ms off; mean of {args.seeds} seeds; Ts = 1 ms.", "",
-             "RMS error against the sensor, N·m (and relative to the regular recording):", "",
-             "| steps off by up to | " + " | ".join(ESTIMATES) + " |", "|---:|" + "---:|" * len(ESTIMATES)]
+    page = ResultsPage("jitter_tolerance", "What timing jitter costs `hdjoint estimate --allow-jitter`",
+                       "python benchmarks/jitter_tolerance.py")
+    page.say(f"The paper experiment, {args.duration:g} s simulated on a {FINE_STEP * 1e6:g} µs grid; rows taken "
+             f"at k·1 ms + u_k, steps up to the given fraction of 1 ms off; mean of {args.seeds} seeds; Ts = 1 ms. "
+             "RMS error against the sensor, N·m (and relative to the regular recording):")
+    page.say("| steps off by up to | " + " | ".join(ESTIMATES) + " |")
+    page.say("|---:|" + "---:|" * len(ESTIMATES))
     for jitter in JITTERS:
         cells = []
         for name in ESTIMATES:
             value = float(np.mean(rms[jitter][name]))
             cells.append(f"{value:.4f} ({value / base[name] - 1:+.1%})")
-        lines.append(f"| {jitter:.0%} | " + " | ".join(cells) + " |")
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "jitter_tolerance.md").write_text("\n".join(lines) + "\n")
-    print("\n".join(lines))
+        page.say(f"| {jitter:.0%} | " + " | ".join(cells) + " |")
+    page.write()
     return 0
 
 

@@ -121,6 +121,8 @@ class RowFeeder:
         self._pending = None  # (time, inputs) of the row awaiting its step, as 1-row arrays
 
     def feed(self, time, inputs) -> None:
+        if len(time) == 0:
+            return
         if self._pending is not None:
             time = np.concatenate((self._pending[0], time))
             inputs = np.vstack((self._pending[1], inputs))
