@@ -4,9 +4,12 @@ moving joint at 1 kHz, the contract's five columns at full precision), runs
 the installed command in a child process per engine and reads the child's
 peak resident set size; --before PATH also runs another checkout's python/
 package (e.g. the commit before streaming) against the same installed
-binaries, for the comparison. Writes docs/results/estimate_memory.md.
+binaries, for the comparison. Each path is an engine, alone or with
+--smooth (fmu, batch, fmu+smooth, batch+smooth). Writes
+docs/results/estimate_memory.md.
 
-Run: python benchmarks/estimate_memory.py [--rows 2400000] [--before /tmp/old/python]
+Run: python benchmarks/estimate_memory.py [--rows 2400000] [--paths fmu batch batch+smooth]
+         [--before /tmp/old/python --before-paths batch+smooth]
 """
 from __future__ import annotations
 
@@ -69,7 +72,9 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rows", type=int, default=2_400_000)
     ap.add_argument("--before", type=Path, help="python/ folder of another checkout to compare with")
-    ap.add_argument("--engines", nargs="+", default=["fmu"], choices=["fmu", "batch"])
+    choices = ["fmu", "batch", "fmu+smooth", "batch+smooth"]
+    ap.add_argument("--paths", nargs="+", default=choices, choices=choices, help="engine[+smooth] to run")
+    ap.add_argument("--before-paths", nargs="+", choices=choices, help="those of --before (default: --paths)")
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "results")
     args = ap.parse_args(argv)
     rows = []
@@ -79,25 +84,28 @@ def main(argv=None) -> int:
         write_long_recording(rec, args.rows)
         size = rec.stat().st_size / 1e6
         print(f"recording: {args.rows} rows, {size:.0f} MB", file=sys.stderr)
-        versions = [("this commit", None)]
+        versions = [("this commit", None, args.paths)]
         if args.before:
-            versions.insert(0, (f"before ({args.before})", old_package(args.before, work)))
-        for label, path in versions:
+            versions.insert(0, (f"before ({args.before})", old_package(args.before, work),
+                                args.before_paths or args.paths))
+        for label, path, paths in versions:
             env = dict(os.environ)
             if path is not None:
                 env["PYTHONPATH"] = str(path)
-            for engine in args.engines:
+            for run in paths:
+                engine, smooth = run.split("+")[0], run.endswith("+smooth")
                 out = work / f"est-{engine}.csv"
                 mb, seconds, code = peak_rss([sys.executable, "-m", "hdjoint.cli", "estimate", str(rec),
-                                              "--engine", engine, "-o", str(out)], env)
-                rows.append((label, engine, mb, mb / size, seconds, code))
+                                              "--engine", engine, *(["--smooth"] if smooth else []),
+                                              "-o", str(out)], env)
+                rows.append((label, run, mb, mb / size, seconds, code))
                 print(rows[-1], file=sys.stderr, flush=True)
                 out.unlink(missing_ok=True)
     lines = ["# Peak memory of `hdjoint estimate` (benchmarks/estimate_memory.py)", "",
              f"{datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC, {platform.machine()}, "
              f"{os.cpu_count()} cores (shared), Python {platform.python_version()}; a synthetic recording of "
              f"{args.rows} rows at 1 kHz, {size:.0f} MB.", "",
-             "| code | engine | peak RSS (MB) | × file size | seconds | exit |", "|---|---|---:|---:|---:|---:|"]
+             "| code | path | peak RSS (MB) | × file size | seconds | exit |", "|---|---|---:|---:|---:|---:|"]
     lines += [f"| {label} | {engine} | {mb:.0f} | {ratio:.2f} | {s:.0f} | {code} |"
               for label, engine, mb, ratio, s, code in rows]
     args.out.mkdir(parents=True, exist_ok=True)

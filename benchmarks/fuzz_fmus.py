@@ -5,7 +5,7 @@ figures to docs/results/fuzz.md (date, machine, FMU build) and each FMU's
 record, with the reproducers, to docs/results/fuzz_<FMU>.json. One process
 per FMU may run in parallel (--fmu NAME); the last one's report has them all.
 
-Run: python benchmarks/fuzz_fmus.py [--sequences N] [--timeout S] [--fmu NAME ...]
+Run: python benchmarks/fuzz_fmus.py [--sequences N] [--timeout CPU_SECONDS] [--fmu NAME ...]
 """
 from __future__ import annotations
 
@@ -68,7 +68,7 @@ def write_report(out: Path) -> str:
         "",
         "Sequences with at least one finding / findings in all:",
         "",
-        "| FMU | sequences | calls | " + " | ".join(CATEGORIES) + " | hang budget (s) | seconds |",
+        "| FMU | sequences | calls | " + " | ".join(CATEGORIES) + " | hang budget (CPU s) | seconds |",
         "|---|---:|---:|" + "---:|" * len(CATEGORIES) + "---:|---:|",
     ]
     for name, s in records.items():
@@ -78,6 +78,8 @@ def write_report(out: Path) -> str:
     for name, s in records.items():
         lines += [f"- **{name}, {c}** ({len(r['calls'])} calls{', minimised' if r['minimised'] else ''}, "
                   f"seed {r['seed']}): {r['finding']}" for c, r in s["reproducers"].items()]
+    if not any(s["reproducers"] for s in records.values()):
+        lines.append("None: no finding of any kind.")
     text = "\n".join(lines) + "\n"
     (out / "fuzz.md").write_text(text)
     return text
@@ -86,7 +88,9 @@ def write_report(out: Path) -> str:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sequences", type=int, default=10_000, help="sequences per FMU (default 10,000)")
-    ap.add_argument("--timeout", type=float, default=1.0, help="seconds a sequence may take before it is a hang")
+    ap.add_argument("--timeout", type=float, default=1.0,
+                    help="CPU seconds a sequence may use before it is a hang (default 1; the wall-clock "
+                         "backstop is fmi_fuzzer.BACKSTOP_FACTOR times it)")
     ap.add_argument("--fmu", nargs="+", default=list(FMU_NAMES), choices=FMU_NAMES)
     ap.add_argument("--report-only", action="store_true", help="only rewrite fuzz.md from the saved records")
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "results")

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "crc32.h"
 #include "description.h"
 #include "fmi2Functions.h"
 #include "model.h"
@@ -135,9 +136,18 @@ fmi2Status no_such_variables(fmi2Component c, const char* function, unsigned sta
 }
 
 // Serialised layout: magic, version, state, time, start, stop, stop-defined,
-// count, then the model's fields (Model::save). The magic and the version
-// are this FMU's (ModelInfo): another hdjoint FMU's state is refused.
+// count, then the model's fields (Model::save), then the seal: the CRC-32 of
+// every byte before it, as a double (an exact whole number). The magic and
+// the version are this FMU's (ModelInfo): another hdjoint FMU's state is
+// refused. The seal is checked before anything else: an edit to any field,
+// even to another valid value, is refused.
 constexpr std::size_t kHeader = 8;
+constexpr std::size_t kSeal = 1;
+
+double seal_of(const double* values, std::size_t count) {
+    return static_cast<double>(hdjoint::fmu::crc32(reinterpret_cast<const unsigned char*>(values),
+                                                   count * sizeof(double)));
+}
 
 bool is_state(double s) {
     for (unsigned k : {kInstantiated, kInitializationMode, kStepComplete, kStepFailed, kTerminated, kError})
@@ -159,6 +169,16 @@ std::string state_problem(const SavedState& s) {
     if ((s.state & kNeedsModel) && !scratch->initialized())
         return std::string("state '") + state_name(s.state) + "' needs an initialised model, but the model was never "
                "initialised";
+    // Before fmi2ExitInitializationMode nothing has run: no model is built
+    // (reset() drops it) and the time is still the start time.
+    if (s.state & (kInstantiated | kInitializationMode)) {
+        if (scratch->initialized())
+            return std::string("state '") + state_name(s.state) + "' comes before initialisation, but the model "
+                   "in it was initialised";
+        if (s.time != s.start_time)
+            return std::string("state '") + state_name(s.state) + "' comes before any step, but its time " +
+                   format_value(s.time) + " is not its start time " + format_value(s.start_time);
+    }
     return "";
 }
 
@@ -393,6 +413,7 @@ static std::vector<double> flatten(const SavedState& s) {
                              s.start_time, s.stop_time, s.stop_time_defined ? 1.0 : 0.0,
                              static_cast<double>(s.model.size())};
     v.insert(v.end(), s.model.begin(), s.model.end());
+    v.push_back(seal_of(v.data(), v.size()));
     return v;
 }
 
@@ -423,17 +444,22 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     if (!serializedState || !FMUstate) return in->error("fmi2DeSerializeFMUstate: null argument");
     return guarded(in, "fmi2DeSerializeFMUstate", [&] {
         const size_t n = size / sizeof(double);
-        if (size % sizeof(double) != 0 || n < kHeader) return in->error("fmi2DeSerializeFMUstate: truncated state");
+        if (size % sizeof(double) != 0 || n < kHeader + kSeal)
+            return in->error("fmi2DeSerializeFMUstate: truncated state (" + std::to_string(size) + " bytes)");
         std::vector<double> v(n);
         std::memcpy(v.data(), serializedState, size);
+        if (v[n - 1] != seal_of(v.data(), n - kSeal))
+            return in->error("fmi2DeSerializeFMUstate: the state's CRC-32 seal does not match its contents: it was "
+                             "edited, truncated or damaged after fmi2SerializeFMUstate wrote it");
+        v.pop_back();
         if (v[0] != info().state_magic)
             return in->error("fmi2DeSerializeFMUstate: not a state of this FMU (" + info().model_identifier + ")");
         if (v[1] != info().state_version)
             return in->error("fmi2DeSerializeFMUstate: state version " + format_value(v[1]) + " is not this " +
                              "binary's version " + format_value(info().state_version));
-        if (v[7] != static_cast<double>(n - kHeader))
+        if (v[7] != static_cast<double>(v.size() - kHeader))
             return in->error("fmi2DeSerializeFMUstate: truncated state (its header counts " + format_value(v[7]) +
-                             " model values, " + std::to_string(n - kHeader) + " follow)");
+                             " model values, " + std::to_string(v.size() - kHeader) + " follow)");
         if (!is_state(v[2]) || (v[6] != 0.0 && v[6] != 1.0))
             return in->error("fmi2DeSerializeFMUstate: state-machine value " + format_value(v[2]) +
                              " or stop-time flag " + format_value(v[6]) + " is not valid");

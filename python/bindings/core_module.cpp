@@ -74,66 +74,180 @@ std::size_t signal_index(const SignalTable<In, Out>& table, const std::string& n
     throw std::logic_error("no signal " + name);
 }
 
+using OutTable = nb::ndarray<nb::numpy, double, nb::ndim<2>>;
+
+OutTable make_table(std::vector<double>&& data, std::size_t columns) {
+    auto* owned = new std::vector<double>(std::move(data));
+    nb::capsule owner(owned, [](void* v) noexcept { delete static_cast<std::vector<double>*>(v); });
+    return OutTable(owned->data(), {owned->size() / columns, columns}, owner);
+}
+
 // The estimator over a recording, with the FMU's timing: row j is a
 // communication point; its step [t_j, t_j+1) runs the samples start + k*Ts
-// inside it on row j's inputs, and row j's outputs are those after the step
-// (the last row steps by Ts). With `smooth`, the joint-state filter's
-// samples are kept and an RTS smoother run backwards over them gives
-// tau_smooth (and tau_smooth_std): row j gets the smoothed torque of the
-// last sample its step ran (the compliance torque before the filter starts).
-std::map<std::string, OutArray> run_estimator(const std::map<std::string, double>& values, Array time, Array i_m,
-                                              Array theta_m, Array theta_l, bool smooth) {
-    const std::size_t n = time.shape(0);
-    check_lengths(n, {i_m.shape(0), theta_m.shape(0), theta_l.shape(0)});
-    const Parameters p = parameters_from(values, true, false);
-    TorqueEstimator estimator(p, time(0));
-    const auto& signals = estimator_signals();
-    // One column per output and internal signal of estimator_signals.def.
-    std::vector<std::vector<double>> columns(signals.size(), std::vector<double>(n));
-    std::vector<double> status(n);
-    std::vector<JointFilterRecord> records;
-    std::vector<long> last_record(n, -1);  // per row: index of the last filter sample its step ran
-    if (smooth) records.reserve(n);
-    {
+// inside it on row j's inputs, and row j's outputs are those after the step.
+// The rows may come in blocks (the estimator carries over): a block's last
+// row steps to `end` (the next block's first time; a recording's last row
+// steps by Ts). With `keep_records`, the joint-state filter's samples are
+// kept for the RTS smoother, and each row is given the index of the last
+// sample its step ran (-1 before the filter starts).
+class EstimatorRows {
+public:
+    EstimatorRows(const Parameters& p, double start_time, bool keep_records)
+        : p_(p), estimator_(p, start_time), keep_records_(keep_records) {}
+
+    struct Columns {
+        std::vector<std::vector<double>> signals;  // one per signal of estimator_signals.def (inputs left empty)
+        std::vector<double> status, last_record;
+    };
+
+    // `keep(record)` takes each kept filter sample as it comes.
+    template <class Keep>
+    Columns run(Array time, Array i_m, Array theta_m, Array theta_l, double end, Keep keep) {
+        const std::size_t n = time.shape(0);
+        check_lengths(n, {i_m.shape(0), theta_m.shape(0), theta_l.shape(0)});
+        const auto& signals = estimator_signals();
+        Columns c;
+        c.signals.resize(signals.size());
+        for (std::size_t k = 0; k < signals.size(); ++k)
+            if (signals[k].kind != SignalKind::Input) c.signals[k].resize(n);
+        c.status.resize(n);
+        if (keep_records_) c.last_record.resize(n);
         nb::gil_scoped_release release;
-        for (std::size_t j = 0; j < n; ++j) {
-            const double end = j + 1 < n ? time(j + 1) : time(j) + p.Ts;
+        for (std::size_t j = 0; j < n; ++j, ++rows_) {
+            const double step_end = j + 1 < n ? time(j + 1) : end;
             std::string message;
-            const EstimatorStatus s = estimator.advance_to(end, {i_m(j), theta_m(j), theta_l(j)}, &message, [&] {
-                if (smooth && estimator.joint_filter().started() &&
-                    (records.empty() || estimator.joint_filter().record().predicted))
-                    records.push_back(estimator.joint_filter().record());
+            const EstimatorStatus s = estimator_.advance_to(step_end, {i_m(j), theta_m(j), theta_l(j)}, &message, [&] {
+                const JointStateFilter& filter = estimator_.joint_filter();
+                if (keep_records_ && filter.started() && (records_ == 0 || filter.record().predicted)) {
+                    keep(filter.record());
+                    ++records_;
+                }
             });
             if (!recoverable(s)) {
                 nb::gil_scoped_acquire acquire;
-                throw std::runtime_error("row " + std::to_string(j) + " (time " + std::to_string(time(j)) +
+                throw std::runtime_error("row " + std::to_string(rows_) + " (time " + std::to_string(time(j)) +
                                          " s): " + message);
             }
-            last_record[j] = static_cast<long>(records.size()) - 1;
-            for (std::size_t c = 0; c < signals.size(); ++c)
-                if (signals[c].kind != SignalKind::Input) columns[c][j] = estimator.outputs().*(signals[c].output);
-            status[j] = static_cast<double>(s);
+            if (keep_records_) c.last_record[j] = static_cast<double>(records_) - 1.0;
+            for (std::size_t k = 0; k < signals.size(); ++k)
+                if (signals[k].kind != SignalKind::Input) c.signals[k][j] = estimator_.outputs().*(signals[k].output);
+            c.status[j] = static_cast<double>(s);
         }
+        return c;
     }
+
+    // The columns as named arrays: every output and internal signal, status (and last_record).
+    static std::map<std::string, OutArray> named(Columns&& c) {
+        const auto& signals = estimator_signals();
+        std::map<std::string, OutArray> out;
+        for (std::size_t k = 0; k < signals.size(); ++k)
+            if (signals[k].kind != SignalKind::Input) out.emplace(signals[k].name, make_array(std::move(c.signals[k])));
+        out.emplace("status", make_array(std::move(c.status)));
+        if (!c.last_record.empty()) out.emplace("last_record", make_array(std::move(c.last_record)));
+        return out;
+    }
+
+    const Parameters& parameters() const { return p_; }
+
+private:
+    Parameters p_;
+    TorqueEstimator estimator_;
+    bool keep_records_;
+    long rows_ = 0, records_ = 0;
+};
+
+// The whole recording at once; with `smooth`, the RTS smoother in memory:
+// row j gets the smoothed torque of the last sample its step ran (the
+// causal tau_hat before the filter starts).
+std::map<std::string, OutArray> run_estimator(const std::map<std::string, double>& values, Array time, Array i_m,
+                                              Array theta_m, Array theta_l, bool smooth) {
+    const Parameters p = parameters_from(values, true, false);
+    check_lengths(time.shape(0), {});
+    EstimatorRows rows(p, time(0), smooth);
+    std::vector<JointFilterRecord> records;
+    if (smooth) records.reserve(time.shape(0));
+    EstimatorRows::Columns c = rows.run(time, i_m, theta_m, theta_l, time(time.shape(0) - 1) + p.Ts,
+                                        [&records](const JointFilterRecord& r) { records.push_back(r); });
     std::map<std::string, OutArray> out;
     if (smooth) {
         const SmoothedTorque sm = smooth_joint_states(records, p);
-        const std::vector<double>& tau_hat = columns[signal_index(signals, "tau_hat")];
-        const std::vector<double>& std_hat = columns[signal_index(signals, "tau_hat_std")];
+        const auto& signals = estimator_signals();
+        const std::vector<double>& tau_hat = c.signals[signal_index(signals, "tau_hat")];
+        const std::vector<double>& std_hat = c.signals[signal_index(signals, "tau_hat_std")];
+        const std::size_t n = tau_hat.size();
         std::vector<double> tau_s(n), std_s(n);
         for (std::size_t j = 0; j < n; ++j) {
-            const long r = last_record[j];
+            const long r = static_cast<long>(c.last_record[j]);
             tau_s[j] = r >= 0 ? sm.tau[static_cast<std::size_t>(r)] : tau_hat[j];
             std_s[j] = r >= 0 ? sm.tau_std[static_cast<std::size_t>(r)] : std_hat[j];
         }
+        c.last_record.clear();
         out.emplace("tau_smooth", make_array(std::move(tau_s)));
         out.emplace("tau_smooth_std", make_array(std::move(std_s)));
     }
-    for (std::size_t c = 0; c < signals.size(); ++c)
-        if (signals[c].kind != SignalKind::Input) out.emplace(signals[c].name, make_array(std::move(columns[c])));
-    out.emplace("status", make_array(std::move(status)));
+    out.merge(EstimatorRows::named(std::move(c)));
     return out;
 }
+
+// The estimator a block of rows at a time (a recording too long to hold):
+// the same numbers as run_estimator on the whole. With keep_records, each
+// block also returns the joint-state filter's new samples as a table of
+// flat records (kRecordValues columns) for RtsSmoother, and each row the
+// index of the last sample its step ran.
+class EstimatorStream {
+public:
+    EstimatorStream(const std::map<std::string, double>& values, double start_time, bool keep_records)
+        : rows_(parameters_from(values, true, false), start_time, keep_records), keep_records_(keep_records) {}
+
+    std::map<std::string, nb::object> run(Array time, Array i_m, Array theta_m, Array theta_l, double end) {
+        std::vector<double> flat;  // the records, flattened as they come (about one a row)
+        if (keep_records_) flat.reserve(time.shape(0) * kRecordValues);
+        auto keep = [&flat](const JointFilterRecord& r) {
+            flat.resize(flat.size() + kRecordValues);
+            flatten_record(r, flat.data() + flat.size() - kRecordValues);
+        };
+        std::map<std::string, nb::object> out;
+        for (auto& [name, array] : EstimatorRows::named(rows_.run(time, i_m, theta_m, theta_l, end, keep)))
+            out.emplace(name, nb::cast(array));
+        if (keep_records_) out.emplace("records", nb::cast(make_table(std::move(flat), kRecordValues)));
+        return out;
+    }
+
+private:
+    EstimatorRows rows_;
+    bool keep_records_;
+};
+
+// The RTS smoother's backward pass over flat records given in blocks, the
+// last block first (each block in forward order): the smoothed torque and
+// its deviation of each record of the block.
+class RtsSmoother {
+public:
+    explicit RtsSmoother(const std::map<std::string, double>& values)
+        : backward_(parameters_from(values, true, false)) {}
+
+    std::map<std::string, OutArray> run(nb::ndarray<const double, nb::ndim<2>, nb::c_contig, nb::device::cpu> records) {
+        if (records.shape(1) != kRecordValues)
+            throw std::invalid_argument("records must have " + std::to_string(kRecordValues) + " columns");
+        const std::size_t n = records.shape(0);
+        std::vector<double> tau(n), tau_std(n);
+        {
+            nb::gil_scoped_release release;
+            for (std::size_t j = n; j-- > 0;) {
+                const RtsBackward::Torque t = backward_.step(unflatten_record(records.data() + j * kRecordValues));
+                tau[j] = t.tau;
+                tau_std[j] = t.tau_std;
+            }
+        }
+        std::map<std::string, OutArray> out;
+        out.emplace("tau_smooth", make_array(std::move(tau)));
+        out.emplace("tau_smooth_std", make_array(std::move(tau_std)));
+        return out;
+    }
+
+private:
+    RtsBackward backward_;
+};
 
 // The estimator's compliance model, eq. (3)-(8) with the beyond-paper terms,
 // run sample by sample (hysteresis and the current delay carry state; one
@@ -357,6 +471,8 @@ NB_MODULE(_core, m) {
     m.doc() = "hdjoint C++ core: the batch path (same code as the FMUs)";
     // The batch status column's value for a sample the joint-state filter rejected as an outlier.
     m.attr("STATUS_SAMPLE_REJECTED") = static_cast<int>(EstimatorStatus::SampleRejected);
+    // The columns of EstimatorStream's records (one joint-state filter sample, flat).
+    m.attr("RECORD_VALUES") = kRecordValues;
     m.def("fmu_signals", &fmu_signals,
           "Each FMU's inputs, outputs and batch-only signals (name, kind, unit, description), in value-reference "
           "order: the tables of src/hdjoint/*_signals.def.");
@@ -392,6 +508,22 @@ NB_MODULE(_core, m) {
           nb::arg("theta_l"), nb::arg("smooth") = false,
           "Compliance model, paper UKF and the joint-state filter (tau_hat, tau_hat_std, tau_load) over a "
           "recording, with the FMU's sampling; smooth=True adds the RTS smoother's tau_smooth, tau_smooth_std.");
+    nb::class_<EstimatorStream>(m, "EstimatorStream",
+                                "run_estimator a block of rows at a time, the estimator carried across blocks "
+                                "(the same numbers as on the whole recording).")
+        .def(nb::init<const std::map<std::string, double>&, double, bool>(), nb::arg("params"),
+             nb::arg("start_time"), nb::arg("keep_records") = false)
+        .def("run", &EstimatorStream::run, nb::arg("time"), nb::arg("i_m"), nb::arg("theta_m"), nb::arg("theta_l"),
+             nb::arg("end"),
+             "The next block: row j steps to row j+1's time, the last row to `end`. The outputs, status and, with "
+             "keep_records, last_record (per row, the index of the last filter sample its step ran, -1 before the "
+             "filter starts) and records (the block's new filter samples, flat, for RtsSmoother).");
+    nb::class_<RtsSmoother>(m, "RtsSmoother",
+                            "The RTS smoother's backward pass over EstimatorStream's records, in blocks given last "
+                            "block first.")
+        .def(nb::init<const std::map<std::string, double>&>(), nb::arg("params"))
+        .def("run", &RtsSmoother::run, nb::arg("records"),
+             "tau_smooth and tau_smooth_std of each record of the block (the block just before the last one given).");
     m.def("compliance", &compliance, nb::arg("params"), nb::arg("i_m"), nb::arg("theta_m"), nb::arg("theta_l"),
           "The estimator's compliance model, eq. (3)-(8) with hysteresis, backlash and the current delay, sample by "
           "sample: tau_compliance, dtheta_f, hysteresis_torque.");

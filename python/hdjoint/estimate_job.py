@@ -1,40 +1,24 @@
 """`hdjoint estimate` from file to file: the recording is read block by block
-and its time base checked as it comes (unit, Ts, gaps, jitter); the FMU
-engine streams, so memory stays flat whatever the recording's length. The
-batch engine and the smoother need the whole recording at once."""
+and its time base checked as it comes (unit, Ts, gaps, jitter); either engine
+streams (estimate_engines), and the smoother keeps what its backward pass
+needs on disk (estimate_smoother), so memory does not grow with the
+recording's length."""
 from __future__ import annotations
 
+import contextlib
 import sys
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from .estimate_engines import BothEngines, CoreEngine, FmuEngine, RowFeeder
+from .estimate_smoother import SMOOTH_COLUMNS, SmoothedRows
 from .jobs import UserError, check_output_file, read_params
 from .metrics import RunningErrorFigures
 from .recording import CHUNK_ROWS, CsvWriter, Recording, RecordingError, iter_recording
 from .timebase import TIME_UNITS, TimeBaseError, check_step, describe, given_ts, irregular_steps, sample_period
 
 FIGURES_OF = ("tau_compliance", "tau_ukf", "tau_hat")
-SHOWN_WARNINGS = 5
-
-
-def warn_fmu_messages(path, messages) -> None:
-    """The FMU's fmi2Warning messages (e.g. an outlier sample the joint-state filter predicted over)."""
-    for message in messages[:SHOWN_WARNINGS]:
-        print(f"warning: {path}: {message}", file=sys.stderr)
-    if len(messages) > SHOWN_WARNINGS:
-        print(f"warning: {path}: {len(messages) - SHOWN_WARNINGS} more warnings", file=sys.stderr)
-
-
-def warn_rejected_samples(path, time, status) -> None:
-    """The joint-state filter predicted over outlier samples (the batch status column): say where."""
-    from . import _core
-    rejected = np.flatnonzero(np.asarray(status) == _core.STATUS_SAMPLE_REJECTED)
-    if rejected.size:
-        first = ", ".join(f"{time[j]:g} s" for j in rejected[:SHOWN_WARNINGS])
-        more = ", ..." if rejected.size > SHOWN_WARNINGS else ""
-        print(f"warning: {path}: the joint-state filter rejected {rejected.size} outlier sample(s) and predicted "
-              f"over them (at {first}{more}); tau_hat_std grows there", file=sys.stderr)
 
 
 @dataclass
@@ -47,6 +31,7 @@ class Options:
     time_unit: str | None = None
     split_gaps: bool = False
     allow_jitter: bool = False
+    block_rows: int = CHUNK_ROWS  # rows read, estimated and written at a time
 
 
 @dataclass
@@ -81,7 +66,7 @@ class TimedBlocks:
 
     def _read(self):
         factor = TIME_UNITS[self.opts.time_unit or "s"]
-        chunks = iter_recording(self.opts.recording)
+        chunks = iter_recording(self.opts.recording, self.opts.block_rows)
         while True:
             chunk = self._guard(next, chunks, None)
             if chunk is None:
@@ -123,53 +108,6 @@ def _pieces(n: int, cuts: list[int]):
             yield bounds[k], bounds[k + 1], k > 0
 
 
-class _StreamedFmu:
-    """JointTorqueEstimator.fmu fed a segment at a time. Each row is a
-    communication point stepped to the next row's time, so a block's last row
-    waits for the next block; a segment's last row steps by Ts (as
-    run_estimator_fmu does with a recording's last row)."""
-
-    def __init__(self, params: dict, ts: float, emit, path):
-        from .fmu_runner import ESTIMATOR_OUTPUTS
-        self.params, self.ts, self.emit, self.path = params, ts, emit, path
-        self.outputs = ESTIMATOR_OUTPUTS
-        self._instance = self._stepper = None
-        self._pending = None  # (time, inputs) of the row awaiting its step
-
-    def feed(self, time: np.ndarray, inputs: np.ndarray) -> None:
-        from .fmu_runner import FmuInstance
-        from .fmus import fmu_path
-        if self._instance is None:
-            self._instance = FmuInstance(fmu_path("JointTorqueEstimator"), "estimator")
-            self._instance.start(float(time[0]), None, self.params, dict(zip(("i_m", "theta_m", "theta_l"),
-                                                                              map(float, inputs[0]))))
-            self._stepper = self._instance.stepper(("i_m", "theta_m", "theta_l"), self.outputs)
-        if self._pending is not None:
-            time = np.concatenate(([self._pending[0]], time))
-            inputs = np.vstack([self._pending[1], inputs])
-        steps = np.diff(time)
-        result = np.empty((len(steps), len(self.outputs)))
-        rows = inputs.tolist()
-        for j, h in enumerate(steps.tolist()):
-            result[j] = self._stepper.step(float(time[j]), h, rows[j])
-        self._pending = (float(time[-1]), inputs[-1])
-        if len(steps):
-            self.emit(time[:-1], result)
-
-    def end_segment(self) -> None:
-        if self._pending is not None:
-            t, row = self._pending
-            self.emit(np.array([t]), np.array([self._stepper.step(t, self.ts, row.tolist())]))
-            self._pending = None
-        self.close()
-
-    def close(self) -> None:
-        if self._instance is not None:
-            warn_fmu_messages(self.path, [m for status, m in self._instance.messages if status == "WARNING"])
-            self._instance.close()
-            self._instance = None
-
-
 def estimate_to_file(opts: Options) -> dict:
     """Run the estimator over OPTS.recording into OPTS.output; returns
     {estimate name: ErrorFigures against tau_sensor} (empty without a sensor)."""
@@ -182,8 +120,7 @@ def estimate_to_file(opts: Options) -> dict:
         params["Ts"] = blocks.ts
     params = parameters.for_estimator(params)
     try:
-        run = _streamed if opts.engine == "fmu" and not opts.smooth else _whole
-        figures = run(opts, blocks, params)
+        figures = _estimate(opts, blocks, params)
     except RuntimeError as e:  # FmuError, or the batch path's invalid input
         raise UserError(f"{opts.recording}: {e}") from None
     if ts_from_recording and abs(blocks.ts - 1e-3) > 1e-9:
@@ -191,23 +128,36 @@ def estimate_to_file(opts: Options) -> dict:
     return figures
 
 
-def _streamed(opts: Options, blocks: TimedBlocks, params: dict) -> dict:
+def _engine(opts: Options, params: dict, ts: float):
+    if opts.engine == "fmu":
+        fmu = FmuEngine(params, ts, opts.recording)
+        return BothEngines(fmu, CoreEngine(params, opts.recording, keep_records=True)) if opts.smooth else fmu
+    return CoreEngine(params, opts.recording, keep_records=opts.smooth)
+
+
+def _estimate(opts: Options, blocks: TimedBlocks, params: dict) -> dict:
+    """Every row through the engine, block by block; the rows written as they come, or, with the smoother,
+    after its backward pass."""
     from .fmu_runner import ESTIMATOR_OUTPUTS
-    figures = {name: RunningErrorFigures() for name in FIGURES_OF}
-    with CsvWriter(opts.output, ("time", *ESTIMATOR_OUTPUTS)) as out:
-        sensor_rows: list = []
+    names = FIGURES_OF + (("tau_smooth",) if opts.smooth else ())
+    figures = {name: RunningErrorFigures() for name in names}
+    columns = ("time", *ESTIMATOR_OUTPUTS) + (SMOOTH_COLUMNS if opts.smooth else ())
+    sensor_rows: list = []  # the sensor's values of the rows read but not yet emitted
+    engine = _engine(opts, params, blocks.ts)
+    with CsvWriter(opts.output, columns) as out, contextlib.ExitStack() as stack:
+        smoothed = stack.enter_context(SmoothedRows(params, ESTIMATOR_OUTPUTS)) if opts.smooth else None
 
         def emit(time, result):
-            columns = {"time": time, **{name: result[:, k] for k, name in enumerate(ESTIMATOR_OUTPUTS)}}
-            out.write(columns)
-            if sensor_rows:
-                sensor, sensor_rows[:] = np.concatenate(sensor_rows), []
+            sensor = _take(sensor_rows, len(time))
+            if smoothed is not None:
+                smoothed.add(time, result, sensor)
+                return
+            out.write({"time": time, **{name: result[name] for name in ESTIMATOR_OUTPUTS}})
+            if sensor is not None:
                 for name in FIGURES_OF:
-                    figures[name].add(columns[name], sensor[:len(time)])
-                if len(sensor) > len(time):
-                    sensor_rows.append(sensor[len(time):])
+                    figures[name].add(result[name], sensor)
 
-        fmu = _StreamedFmu(params, blocks.ts, emit, opts.recording)
+        feeder = RowFeeder(engine, blocks.ts, emit)
         has_sensor = None
         try:
             for block in blocks:
@@ -216,50 +166,34 @@ def _streamed(opts: Options, blocks: TimedBlocks, params: dict) -> dict:
                 inputs = np.column_stack([rec.i_m, rec.theta_m, rec.theta_l])
                 for start, stop, new_segment in _pieces(len(rec), block.cuts):
                     if new_segment:
-                        fmu.end_segment()
+                        _end_segment(feeder, smoothed)
                     if has_sensor:
                         sensor_rows.append(rec.tau_sensor[start:stop])
-                    fmu.feed(rec.time[start:stop], inputs[start:stop])
-            fmu.end_segment()
+                    feeder.feed(rec.time[start:stop], inputs[start:stop])
+            _end_segment(feeder, smoothed)
         finally:
-            fmu.close()  # also when a later block is refused
+            engine.end_segment()  # also when a later block is refused
+        if smoothed is not None:
+            for time, result, sensor in smoothed.rows(opts.block_rows):
+                out.write({"time": time, **result})
+                if has_sensor:
+                    for name in names:
+                        figures[name].add(result[name], sensor)
+    if opts.engine == "batch":
+        engine.rejected.warn()
     return {name: f.result() for name, f in figures.items()} if has_sensor else {}
 
 
-def _whole(opts: Options, blocks: TimedBlocks, params: dict) -> dict:
-    from . import _core
-    from .fmu_runner import ESTIMATOR_OUTPUTS, run_estimator_fmu
-    from .metrics import error_figures
-    parts, segments = [], [[]]
-    for block in blocks:
-        for start, stop, new_segment in _pieces(len(block.rec), block.cuts):
-            if new_segment:
-                segments.append([])
-            segments[-1].append(block.rec.slice(start, stop))
-    names = list(ESTIMATOR_OUTPUTS) + (["tau_smooth", "tau_smooth_std"] if opts.smooth else [])
-    for pieces in segments:
-        r = {name: np.concatenate([getattr(p, name) for p in pieces])
-             for name in ("time", "i_m", "theta_m", "theta_l")}
-        args = (r["time"], r["i_m"], r["theta_m"], r["theta_l"])
-        if opts.engine == "fmu":
-            warnings: list[str] = []
-            est = run_estimator_fmu(*args, params, warnings=warnings)
-            warn_fmu_messages(opts.recording, warnings)
-        else:
-            est = _core.run_estimator(params, *args)
-            warn_rejected_samples(opts.recording, r["time"], est["status"])
-        if opts.smooth:
-            # The smoother runs offline over the joint-state filter's samples, in
-            # the batch path, whichever engine computed the causal estimates.
-            smoothed = _core.run_estimator(params, *args, smooth=True)
-            est["tau_smooth"], est["tau_smooth_std"] = smoothed["tau_smooth"], smoothed["tau_smooth_std"]
-        parts.append({"time": r["time"], **{name: est[name] for name in names}})
-    columns = {name: np.concatenate([p[name] for p in parts]) for name in ["time", *names]}
-    with CsvWriter(opts.output, list(columns)) as out:
-        for start in range(0, len(columns["time"]), CHUNK_ROWS):  # formatted text a block at a time
-            out.write({name: values[start:start + CHUNK_ROWS] for name, values in columns.items()})
-    sensors = [p.tau_sensor for pieces in segments for p in pieces]
-    if any(s is None for s in sensors):
-        return {}
-    sensor = np.concatenate(sensors)
-    return {name: error_figures(columns[name], sensor) for name in FIGURES_OF + (("tau_smooth",) if opts.smooth else ())}
+def _end_segment(feeder: RowFeeder, smoothed) -> None:
+    feeder.end_segment()
+    if smoothed is not None:
+        smoothed.end_segment()
+
+
+def _take(queue: list, n: int):
+    """The first N values of the arrays queued in QUEUE (removed), or None when nothing is queued."""
+    if not queue:
+        return None
+    values = np.concatenate(queue)
+    queue[:] = [values[n:]] if len(values) > n else []
+    return values[:n]

@@ -298,33 +298,65 @@ bool JointStateFilter::load(const std::vector<double>& in, std::size_t* cursor) 
     return true;
 }
 
+void flatten_record(const JointFilterRecord& r, double* out) {
+    out = std::copy(r.x_prior.data(), r.x_prior.data() + r.x_prior.size(), out);
+    out = std::copy(r.P_prior.data(), r.P_prior.data() + r.P_prior.size(), out);
+    out = std::copy(r.F.data(), r.F.data() + r.F.size(), out);
+    out = std::copy(r.x.data(), r.x.data() + r.x.size(), out);
+    out = std::copy(r.P.data(), r.P.data() + r.P.size(), out);
+    *out++ = r.input.i_m;
+    *out++ = r.input.z;
+    *out++ = r.input.t;
+    *out = r.predicted ? 1.0 : 0.0;
+}
+
+JointFilterRecord unflatten_record(const double* in) {
+    JointFilterRecord r;
+    auto take = [&in](auto& m) {
+        std::copy(in, in + m.size(), m.data());
+        in += m.size();
+    };
+    take(r.x_prior);
+    take(r.P_prior);
+    take(r.F);
+    take(r.x);
+    take(r.P);
+    r.input = {in[0], in[1], in[2]};
+    r.predicted = in[3] == 1.0;
+    return r;
+}
+
+RtsBackward::Torque RtsBackward::step(const JointFilterRecord& r) {
+    JointState xs = r.x;
+    JointCovariance Ps = r.P;
+    if (has_next_) {
+        Eigen::LLT<JointCovariance> llt(next_.P_prior);
+        if (next_.predicted && llt.info() == Eigen::Success && next_.P_prior.allFinite()) {
+            // C = P F^T Pprior^-1, as the transpose of Pprior^-1 F P.
+            const JointCovariance C = llt.solve(JointCovariance(next_.F * r.P)).transpose();
+            xs = r.x + C * (xs_ - next_.x_prior);
+            Ps = r.P + C * (Ps_ - next_.P_prior) * C.transpose();
+            symmetrize(&Ps);
+        }
+    }
+    xs_ = xs;
+    Ps_ = Ps;
+    next_ = r;
+    has_next_ = true;
+    const JointTorque T = joint_state_torque(xs_, r.input, p_);
+    return {T.valid ? T.tau : std::nan(""), std::sqrt(std::max(JointStateFilter::torque_variance(T, Ps_), 0.0))};
+}
+
 SmoothedTorque smooth_joint_states(const std::vector<JointFilterRecord>& records, const Parameters& p) {
     SmoothedTorque s;
     const std::size_t n = records.size();
     s.tau.resize(n);
     s.tau_std.resize(n);
-    if (n == 0) return s;
-    JointState xs = records[n - 1].x;
-    JointCovariance Ps = records[n - 1].P;
+    RtsBackward backward(p);
     for (std::size_t j = n; j-- > 0;) {
-        const JointFilterRecord& r = records[j];
-        if (j + 1 < n) {
-            const JointFilterRecord& next = records[j + 1];
-            Eigen::LLT<JointCovariance> llt(next.P_prior);
-            if (next.predicted && llt.info() == Eigen::Success && next.P_prior.allFinite()) {
-                // C = P F^T Pprior^-1, as the transpose of Pprior^-1 F P.
-                const JointCovariance C = llt.solve(JointCovariance(next.F * r.P)).transpose();
-                xs = r.x + C * (xs - next.x_prior);
-                Ps = r.P + C * (Ps - next.P_prior) * C.transpose();
-                symmetrize(&Ps);
-            } else {
-                xs = r.x;
-                Ps = r.P;
-            }
-        }
-        const JointTorque T = joint_state_torque(xs, r.input, p);
-        s.tau[j] = T.valid ? T.tau : std::nan("");
-        s.tau_std[j] = std::sqrt(std::max(JointStateFilter::torque_variance(T, Ps), 0.0));
+        const RtsBackward::Torque t = backward.step(records[j]);
+        s.tau[j] = t.tau;
+        s.tau_std[j] = t.tau_std;
     }
     return s;
 }

@@ -25,6 +25,7 @@
 // Measurements: theta_m = N*(theta_l + delta) and theta_l, read by floor
 // quantisers: the reading plus q/2 is unbiased with variance q^2/12.
 // Output: tau(x) and its standard deviation from P.
+#include <cstddef>
 #include <vector>
 
 #include "linear_algebra.h"
@@ -194,6 +195,33 @@ private:
     JointFilterRecord record_;
     JointFilterOutput out_;
     bool started_ = false;
+};
+
+// A record as flat doubles (x_prior, P_prior, F, x, P column-major, the
+// input's i_m, z, t, predicted as 0/1), for a smoother whose records wait on
+// disk between its forward and backward pass.
+constexpr std::size_t kRecordValues = 2 * kJointStates + 3 * kJointStates * kJointStates + 3 + 1;
+void flatten_record(const JointFilterRecord& r, double* out);
+JointFilterRecord unflatten_record(const double* in);
+
+// The RTS smoother's backward pass one sample at a time, the newest first. It
+// carries the smoothed state and the later sample's record from one sample
+// to the one before, so the records can come in reverse blocks.
+class RtsBackward {
+public:
+    explicit RtsBackward(const Parameters& p) : p_(p) {}
+    struct Torque {
+        double tau, tau_std;
+    };
+    // The smoothed torque at `r`, the sample just before the one last given.
+    Torque step(const JointFilterRecord& r);
+
+private:
+    Parameters p_;
+    bool has_next_ = false;
+    JointFilterRecord next_;                        // the later sample
+    JointState xs_ = JointState::Zero();            // and its smoothed state
+    JointCovariance Ps_ = JointCovariance::Zero();  // and covariance
 };
 
 // The RTS smoother over filter records (one per sample, in order): the

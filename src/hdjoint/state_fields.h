@@ -5,6 +5,9 @@
 // reads it back (StateReader: takes doubles in the same order and checks
 // each one -- finite, within [lo, hi], whole for counters, 0/1 for flags --
 // naming the first field that fails). Nothing is ever read by position.
+// Every reading checks every value the same way: the FMU's states and the
+// core's load_state() (one validation; a test that plants a fault in a
+// state must plant one that passes it).
 #include <cmath>
 #include <cstddef>
 #include <sstream>
@@ -53,11 +56,7 @@ private:
 
 class StateReader {
 public:
-    // `check_values`: refuse non-finite and out-of-range doubles (a state from
-    // outside: the FMU); off, only the layout and the counters and flags are
-    // checked (the core's own copies, and tests that plant a fault).
-    explicit StateReader(const std::vector<double>& in, bool check_values = true)
-        : in_(in), check_values_(check_values) {}
+    explicit StateReader(const std::vector<double>& in) : in_(in) {}
 
     bool operator()(const char* name, double& v, double lo = -kUnbounded, double hi = kUnbounded) {
         double x = 0.0;
@@ -67,14 +66,14 @@ public:
     }
     bool operator()(const char* name, long& v, double lo = 0.0, double hi = kMaxStoredCount) {
         double x = 0.0;
-        if (!take(name, &x, lo, hi, true)) return false;
+        if (!take(name, &x, lo, hi)) return false;
         if (x != std::floor(x)) return fail(name, x, "is not a whole number");
         v = static_cast<long>(x);  // in range: checked above
         return true;
     }
     bool operator()(const char* name, bool& v) {
         double x = 0.0;
-        if (!take(name, &x, 0.0, 1.0, true)) return false;
+        if (!take(name, &x, 0.0, 1.0)) return false;
         if (x != 0.0 && x != 1.0) return fail(name, x, "is not 0 or 1");
         v = x == 1.0;
         return true;
@@ -94,7 +93,7 @@ public:
             problem_ = std::string("state part ") + name + " does not fit";
             return false;
         }
-        for (std::size_t k = begin; k < cursor_ && check_values_; ++k)
+        for (std::size_t k = begin; k < cursor_; ++k)
             if (!std::isfinite(in_[k])) return fail(name, in_[k], "holds a value that is not finite");
         return true;
     }
@@ -115,14 +114,12 @@ public:
     const std::string& problem() const { return problem_; }
 
 private:
-    // `always`: check even without check_values (counters and flags are converted).
-    bool take(const char* name, double* x, double lo, double hi, bool always = false) {
+    bool take(const char* name, double* x, double lo, double hi) {
         if (cursor_ >= in_.size()) {
             problem_ = std::string("state ends before field ") + name;
             return false;
         }
         *x = in_[cursor_++];
-        if (!check_values_ && !always) return true;
         if (!std::isfinite(*x)) return fail(name, *x, "is not finite");
         if (*x < lo || *x > hi) {
             std::ostringstream range;
@@ -141,14 +138,13 @@ private:
     }
 
     const std::vector<double>& in_;
-    bool check_values_;
     std::size_t cursor_ = 0;
     std::string problem_;
 };
 
 // An object's fields() as a flat vector, and back (all or nothing: a state
-// that does not fit leaves the object as it was). The core's own copies: the
-// layout is checked, the values only where the FMU's reading checks them.
+// that does not fit, or holds a value its field refuses, leaves the object as
+// it was). The same reading as the FMU's: layout and every value checked.
 template <class T>
 std::vector<double> save_fields(const T& object) {
     std::vector<double> d;
@@ -159,7 +155,7 @@ std::vector<double> save_fields(const T& object) {
 template <class T>
 bool load_fields(T& object, const std::vector<double>& d, std::string* problem = nullptr) {
     T copy = object;
-    StateReader r(d, false);
+    StateReader r(d);
     if (!copy.fields(r) || !r.finished()) {
         if (problem) *problem = r.problem();
         return false;

@@ -114,19 +114,23 @@ TEST(JointStateFilter, SaveRestoreIsExact) {
 TEST(JointStateFilter, RecoversFromABrokenCovariance) {
     const Parameters p;
     const std::vector<EstimatorInputs> inputs = moving_joint(p, 800);
-    TorqueEstimator a(p);
-    for (int k = 0; k < 400; ++k) ASSERT_EQ(a.step(inputs[k]), EstimatorStatus::Ok) << k;
+    auto held = [&](int k) { return JointInput{inputs[k].i_m, 0.0, k * 1e-3}; };
+    JointStateFilter a(p);
+    for (int k = 0; k < 400; ++k) a.step(inputs[k].theta_m, inputs[k].theta_l, held(k));
     // Break the filter's covariance (what a failed factorisation leaves): NaN.
-    std::vector<double> saved = a.save_state();
-    const std::size_t joint_start = saved.size() - 5 - JointStateFilter::kSavedSize;
-    saved[joint_start + 1 + kJointStates + 7] = std::numeric_limits<double>::quiet_NaN();
-    TorqueEstimator b(p);
-    ASSERT_TRUE(b.load_state(saved));
-    EXPECT_EQ(b.step(inputs[400]), EstimatorStatus::CovarianceReset);
-    for (int k = 401; k < 800; ++k) ASSERT_TRUE(recoverable(b.step(inputs[k])));
-    EXPECT_TRUE(std::isfinite(b.outputs().tau_hat));
-    for (int k = 400; k < 800; ++k) a.step(inputs[k]);
-    EXPECT_NEAR(b.outputs().tau_hat, a.outputs().tau_hat, 0.01);
+    // Planted through the filter's own flat block: load_state() refuses a NaN,
+    // as the FMU does.
+    std::vector<double> saved;
+    a.save(&saved);
+    saved[1 + kJointStates + 7] = std::numeric_limits<double>::quiet_NaN();
+    JointStateFilter b(p);
+    std::size_t cursor = 0;
+    ASSERT_TRUE(b.load(saved, &cursor));
+    EXPECT_EQ(b.step(inputs[400].theta_m, inputs[400].theta_l, held(400)), FilterStatus::CovarianceReset);
+    for (int k = 401; k < 800; ++k) b.step(inputs[k].theta_m, inputs[k].theta_l, held(k));
+    EXPECT_TRUE(std::isfinite(b.output().tau));
+    for (int k = 400; k < 800; ++k) a.step(inputs[k].theta_m, inputs[k].theta_l, held(k));
+    EXPECT_NEAR(b.output().tau, a.output().tau, 0.01);
 }
 
 TEST(JointStateFilter, UnreadableSamplesArePredictedOverWithGrowingDeviation) {

@@ -247,6 +247,26 @@ TEST(TorqueEstimator, SaveLoadOfAFreshEstimator) {
     expect_same_outputs(fresh.outputs(), used.outputs(), 0);
 }
 
+// load_state() checks every value as the FMU does (one reading): a NaN
+// anywhere, or a sample count that is negative or not whole, is refused and
+// the estimator is left as it was.
+TEST(TorqueEstimator, LoadStateRefusesValuesTheFmuRefuses) {
+    const Parameters p;
+    TorqueEstimator a(p);
+    for (const auto& in : varying_inputs(p, 10, 0)) a.step(in);
+    const std::vector<double> good = a.save_state();
+    TorqueEstimator b(p);
+    const std::vector<double> b_before = b.save_state();
+    for (std::size_t k = 0; k < good.size(); ++k) {
+        std::vector<double> s = good;
+        s[k] = std::nan("");
+        EXPECT_FALSE(b.load_state(s)) << "a NaN in value " << k << " was accepted";
+    }
+    EXPECT_EQ(b.save_state(), b_before);
+    ASSERT_TRUE(b.load_state(good));
+    EXPECT_EQ(b.save_state(), good);
+}
+
 TEST(TorqueEstimator, LoadStateRejectsMalformedData) {
     const Parameters p;
     TorqueEstimator a(p);

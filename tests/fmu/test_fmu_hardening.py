@@ -11,6 +11,7 @@ import sys
 import textwrap
 import xml.etree.ElementTree as ET
 import zipfile
+import zlib
 
 import numpy as np
 import pytest
@@ -21,8 +22,9 @@ from hdjoint.fmus import fmu_path
 from conftest import ALL_FMUS, CONTROLLER, ESTIMATOR, FMU_IO, JOINT
 
 HEADER = 8  # serialised state: magic, version, state, time, start, stop, stop-defined, count
-STATE, TIME = 2, 3
-STEP_COMPLETE = 4.0  # the glue's state bit for "step complete"
+STATE, TIME, START = 2, 3, 4
+INSTANTIATED, STEP_COMPLETE = 1.0, 4.0  # the glue's state bits
+# ... then the model's fields, then the seal: zlib's CRC-32 of every byte before it.
 
 
 def last_error(s) -> str:
@@ -36,7 +38,16 @@ def doubles(blob: bytes) -> list[float]:
 
 
 def pack(values) -> bytes:
-    return struct.pack(f"{len(values)}d", *values)
+    """VALUES (header and model fields, the seal left off) serialised and sealed, as the FMU does:
+    what an edit that also forged the seal would give, so the fields' own checks are reached."""
+    body = struct.pack(f"{len(values)}d", *values)
+    return body + struct.pack("d", float(zlib.crc32(body)))
+
+
+def unsealed(blob: bytes) -> list[float]:
+    """The header and model fields of a serialised state, after checking its seal is zlib's CRC-32."""
+    assert struct.unpack("d", blob[-8:])[0] == float(zlib.crc32(blob[:-8]))
+    return doubles(blob[:-8])
 
 
 def serialized(s) -> bytes:
@@ -144,7 +155,7 @@ def parameter_index(s, name) -> int:
 ])
 def test_a_state_with_a_parameter_out_of_range_is_refused(name, parameter, value, why, started):
     s = started(name)
-    v = doubles(serialized(s))
+    v = unsealed(serialized(s))
     v[parameter_index(s, parameter)] = value
     message = refused_at_deserialize(s, pack(v))
     assert parameter in message and why in message, message
@@ -153,7 +164,7 @@ def test_a_state_with_a_parameter_out_of_range_is_refused(name, parameter, value
 @pytest.mark.parametrize("name", ALL_FMUS)
 def test_a_state_with_a_non_finite_model_field_is_refused(name, started):
     s = started(name)
-    good = doubles(serialized(s))
+    good = unsealed(serialized(s))
     for k in range(HEADER, len(good)):
         v = list(good)
         v[k] = float("nan")
@@ -166,7 +177,7 @@ def test_a_state_with_a_non_finite_model_field_is_refused(name, started):
 @pytest.mark.parametrize("name", ALL_FMUS)
 def test_step_complete_on_a_never_initialised_model_is_refused(name, make_slave):
     s = make_slave(name)  # instantiated only
-    v = doubles(serialized(s))
+    v = unsealed(serialized(s))
     v[STATE] = STEP_COMPLETE
     message = refused_at_deserialize(s, pack(v))
     assert "never initialised" in message, message
@@ -175,7 +186,7 @@ def test_step_complete_on_a_never_initialised_model_is_refused(name, make_slave)
 @pytest.mark.parametrize("name", ALL_FMUS)
 def test_a_state_machine_value_that_is_no_state_is_refused(name, started):
     s = started(name)
-    v = doubles(serialized(s))
+    v = unsealed(serialized(s))
     v[STATE] = 3.0
     assert "state-machine value 3" in refused_at_deserialize(s, pack(v))
 
@@ -183,7 +194,7 @@ def test_a_state_machine_value_that_is_no_state_is_refused(name, started):
 @pytest.mark.parametrize("name", ALL_FMUS)
 def test_a_time_before_the_start_or_not_finite_is_refused(name, started):
     s = started(name)
-    good = doubles(serialized(s))
+    good = unsealed(serialized(s))
     for t in (-1.0, float("inf")):
         v = list(good)
         v[TIME] = t
@@ -193,7 +204,7 @@ def test_a_time_before_the_start_or_not_finite_is_refused(name, started):
 @pytest.mark.parametrize("name", (ESTIMATOR, CONTROLLER))  # sampled models: the joint does not count samples
 def test_a_far_future_time_makes_the_next_step_refused_not_hang(name, started):
     s = started(name)
-    v = doubles(serialized(s))
+    v = unsealed(serialized(s))
     v[TIME] = 1e300
     st = s.slave.deSerializeFMUstate(pack(v))
     s.slave.setFMUstate(st)
@@ -206,7 +217,7 @@ def test_a_far_future_time_makes_the_next_step_refused_not_hang(name, started):
 @pytest.mark.parametrize("name", ALL_FMUS)
 def test_another_version_of_this_fmus_state_is_refused(name, started):
     s = started(name)
-    v = doubles(serialized(s))
+    v = unsealed(serialized(s))
     v[1] += 1.0
     assert "state version" in refused_at_deserialize(s, pack(v))
 
@@ -217,6 +228,37 @@ def test_a_state_of_another_hdjoint_fmu_is_refused_at_deserialize(source, target
     t = make_slave(target)
     t.start()
     assert "not a state of this FMU" in refused_at_deserialize(t, blob)
+
+
+@pytest.mark.parametrize("name", ALL_FMUS)
+def test_every_edit_of_a_serialised_state_breaks_its_seal(name, started):
+    # The fuzzer's finding: a state-machine field edited to another valid
+    # state was accepted. Every value, the seal included, is tried.
+    s = started(name)
+    blob = serialized(s)
+    for k in range(len(blob) // 8):
+        edited = bytearray(blob)
+        edited[8 * k] ^= 0x01  # the lowest mantissa bit: still a valid, finite number
+        message = refused_at_deserialize(s, bytes(edited))
+        assert "CRC-32 seal does not match" in message, (k, message)
+    s.slave.freeFMUstate(s.slave.deSerializeFMUstate(blob))  # the untouched state still loads
+
+
+@pytest.mark.parametrize("name", ALL_FMUS)
+def test_a_resealed_state_before_initialisation_must_have_no_model_and_no_time_run(name, make_slave, started):
+    # Behind the seal: a forged state whose state machine says "instantiated"
+    # (legal before initialisation only) carrying an initialised model or a
+    # time past its start is refused.
+    v = unsealed(serialized(started(name)))
+    v[STATE] = INSTANTIATED
+    s = make_slave(name)
+    message = refused_at_deserialize(s, pack(v))
+    assert "comes before initialisation, but the model in it was initialised" in message, message
+    s.slave.reset()  # out of the error state the refusal left: instantiated again
+    fresh = unsealed(serialized(s))
+    fresh[TIME] = fresh[START] + 1.0
+    message = refused_at_deserialize(s, pack(fresh))
+    assert "comes before any step" in message, message
 
 
 # ---------------------------------------------------------------- initial dependencies

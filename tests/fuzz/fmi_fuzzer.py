@@ -2,19 +2,25 @@
 
 Each sequence runs in a forked child process (the FMU's binary is loaded
 once in the parent, so a child starts in milliseconds); a child that dies is
-a crash, one that outlives its time budget is a hang. Inside the child a
+a crash, one that outlives its time budget is a hang. The budget is the
+child's CPU time (an ITIMER_PROF timer: SIGPROF's default action kills it), so
+a loaded machine, which slows the wall clock, cannot fake a hang; a wall-clock
+backstop (BACKSTOP_FACTOR times the budget) catches a child that blocks
+without computing. Inside the child a
 model of the FMI 2.0 state machine (the co-simulation state table) says
 whether each call is legal, so the fuzzer can tell:
 
     crash                     the child died on a signal or exited abnormally
-    hang                      the sequence did not finish within the budget
+    hang                      the sequence used more than its CPU budget, or
+                              made no progress within the wall-clock backstop
     illegal call accepted     a call the standard forbids (wrong state, bad
                               value, wrong communication point, a step past
                               stopTime) returned fmi2OK/Warning/Discard
     corrupted state accepted  a truncated, extended or foreign serialised
                               state, or one with a non-finite field or an
-                              edited state-machine field or count, was
-                              deserialised (or set) with success
+                              edited field (any value changed: the state
+                              is sealed by a CRC-32), was deserialised (or
+                              set) with success
     non-finite output         fmi2GetReal returned fmi2OK with NaN or Inf
                               outside the error state
 
@@ -63,8 +69,12 @@ ALLOWED = {
 }
 # Where the standard's wording leaves doubt: neither accepting nor refusing is a finding.
 UNSETTLED = {"status": {INIT}}
-# Serialised layout (fmu/fmi2_glue.cpp): doubles; these slots are checked exactly.
-MAGIC_SLOT, STATE_SLOT, COUNT_SLOT = 0, 2, 7  # header: magic, version, state, time, start, stop, stop-defined, count
+# Serialised layout (fmu/fmi2_glue.cpp): doubles, sealed by a CRC-32 in the last one.
+STATE_SLOT = 2  # header: magic, version, state, time, start, stop, stop-defined, count
+# A sequence may take this many times its CPU budget in wall-clock time before the
+# parent gives up on it (a child that blocks without computing): generous, so that
+# only the CPU budget decides on a machine loaded up to ~BACKSTOP_FACTOR runnable processes a core.
+BACKSTOP_FACTOR = 30
 
 LEGAL_STEPS = (1e-3, 2e-3, 1e-2, 0.1)
 EXTREME_STEPS = (215.0, 1e5, 2.2e5, 1e6, 1e300)
@@ -208,9 +218,7 @@ class Child:
             self.free()
             return []
         if kind == "_selftest":  # the harness's own check: a crash or a hang it must classify
-            if op[1] == "crash":
-                os.kill(os.getpid(), signal.SIGSEGV)
-            time.sleep(op[2])
+            _selftest(op[1], op[2])
             return []
         m = self.model
         if m.state == FATAL_STATE:
@@ -418,8 +426,8 @@ def corrupt(data: bytes, corruption: list, snap: Snapshot) -> tuple[bytes, bool,
     elif kind == "state":  # the state-machine field, edited to another valid value
         must = values[STATE_SLOT] != corruption[2]
         slot, values[STATE_SLOT] = STATE_SLOT, corruption[2]
-    else:  # "value": a finite value anywhere; only the magic and count slots are checked exactly
-        must = slot in (MAGIC_SLOT, COUNT_SLOT) and values[slot] != corruption[2]
+    else:  # "value": a finite value anywhere; any change breaks the seal
+        must = struct.pack("d", values[slot]) != struct.pack("d", corruption[2])
         values[slot] = corruption[2]
     return struct.pack(f"{len(values)}d", *values), must, Snapshot(None, None, None)
 
@@ -567,8 +575,26 @@ def _child_main(fmu: LoadedFmu, foreign: dict, ops: list, fd: int) -> None:
     out.flush()
 
 
-def run_sequence(fmu: LoadedFmu, ops: list, foreign: dict, timeout: float, seed: int | None = None) -> Outcome:
-    """Run OPS in a forked child; classify crash and hang here, the rest in the child."""
+def _selftest(what: str, amount: float) -> None:
+    """What the harness must classify: "crash" (SIGSEGV), "sleep" AMOUNT s (blocked, no CPU used),
+    "spin" AMOUNT s of CPU time (math.inf: an unbounded loop), "pin" to CPU AMOUNT."""
+    if what == "crash":
+        os.kill(os.getpid(), signal.SIGSEGV)
+    elif what == "sleep":
+        time.sleep(amount)
+    elif what == "spin":
+        end = time.process_time() + amount
+        while time.process_time() < end:
+            pass
+    elif what == "pin":
+        os.sched_setaffinity(0, {int(amount)})
+
+
+def run_sequence(fmu: LoadedFmu, ops: list, foreign: dict, timeout: float, seed: int | None = None,
+                 backstop: float | None = None) -> Outcome:
+    """Run OPS in a forked child with TIMEOUT seconds of CPU time (and BACKSTOP seconds of wall-clock
+    time, BACKSTOP_FACTOR * TIMEOUT by default); classify crash and hang here, the rest in the child."""
+    backstop = BACKSTOP_FACTOR * timeout if backstop is None else backstop
     read_fd, write_fd = os.pipe()
     start = time.monotonic()
     pid = os.fork()
@@ -576,6 +602,8 @@ def run_sequence(fmu: LoadedFmu, ops: list, foreign: dict, timeout: float, seed:
         os.close(read_fd)
         code = 0
         try:
+            signal.signal(signal.SIGPROF, signal.SIG_DFL)  # its default action ends the process
+            signal.setitimer(signal.ITIMER_PROF, timeout)  # counts this process's CPU time only
             _child_main(fmu, foreign, ops, write_fd)
         except BaseException:
             code = 3
@@ -583,7 +611,7 @@ def run_sequence(fmu: LoadedFmu, ops: list, foreign: dict, timeout: float, seed:
     os.close(write_fd)
     outcome = Outcome(fmu.name, seed, ops, 0)
     buffer, last_call, done, harness = b"", -1, False, None
-    deadline = start + timeout
+    deadline = start + backstop
     with os.fdopen(read_fd, "rb") as pipe:
         while True:
             left = deadline - time.monotonic()
@@ -607,19 +635,22 @@ def run_sequence(fmu: LoadedFmu, ops: list, foreign: dict, timeout: float, seed:
                     harness = msg
                 elif msg[0] == "done":
                     done = True
+    at = ops[last_call] if last_call >= 0 else None
     if not done and time.monotonic() >= deadline:
         os.kill(pid, signal.SIGKILL)
         os.waitpid(pid, 0)
-        outcome.findings.append(("hang", last_call, f"{ops[last_call] if last_call >= 0 else None} "
-                                                    f"did not return within {timeout} s"))
+        outcome.findings.append(("hang", last_call, f"{at} made no progress within the {backstop} s "
+                                                    "wall-clock backstop"))
     else:
         _, status = os.waitpid(pid, 0)
         if harness is not None:
             raise RuntimeError(f"fuzzer failure in {fmu.name} at call {harness[1]} {ops[harness[1]]}: {harness[2]}")
-        if not done or os.WIFSIGNALED(status) or os.WEXITSTATUS(status) != 0:
+        if os.WIFSIGNALED(status) and os.WTERMSIG(status) == signal.SIGPROF:
+            outcome.findings.append(("hang", last_call, f"{at} did not return within {timeout} s of CPU time"))
+        elif not done or os.WIFSIGNALED(status) or os.WEXITSTATUS(status) != 0:
             how = (f"signal {signal.Signals(os.WTERMSIG(status)).name}" if os.WIFSIGNALED(status)
                    else f"exit {os.WEXITSTATUS(status)}")
-            outcome.findings.append(("crash", last_call, f"{ops[last_call] if last_call >= 0 else None}: {how}"))
+            outcome.findings.append(("crash", last_call, f"{at}: {how}"))
     outcome.calls = last_call + 1
     outcome.seconds = time.monotonic() - start
     return outcome
@@ -661,8 +692,8 @@ class Campaign:
         fmu = self.fmus[name]
         return [run_sequence(fmu, generate(fmu, s, length), self.foreign, timeout, s) for s in seeds]
 
-    def replay(self, name: str, ops: list, timeout: float = 3.0) -> Outcome:
-        return run_sequence(self.fmus[name], ops, self.foreign, timeout)
+    def replay(self, name: str, ops: list, timeout: float = 3.0, backstop: float | None = None) -> Outcome:
+        return run_sequence(self.fmus[name], ops, self.foreign, timeout, backstop=backstop)
 
     def minimise(self, name: str, ops: list, category: str, timeout: float = 3.0) -> list:
         """The shortest call list (removing one call at a time) that still shows CATEGORY."""

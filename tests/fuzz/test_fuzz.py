@@ -4,13 +4,19 @@ fmi_fuzzer.py). One run is shared by the tests below, each of which asserts
 one class of finding is absent."""
 from __future__ import annotations
 
+import math
+import os
+import subprocess
+import sys
+import time
+
 import pytest
 
 from fmi_fuzzer import FMU_NAMES, Campaign, summarise
 from hdjoint.fmus import fmu_path
 
 SEQUENCES_PER_FMU = 80
-TIMEOUT = 1.5  # s: a normal sequence takes ~50 ms
+TIMEOUT = 1.5  # s of CPU time: a normal sequence takes ~50 ms
 pytestmark = pytest.mark.slow  # one shared fuzz run: ~20 s
 
 
@@ -67,10 +73,37 @@ def test_a_child_killed_by_a_signal_is_a_crash(campaign):
     assert "SIGSEGV" in outcome.findings[0][2]
 
 
-def test_a_sequence_over_its_budget_is_a_hang(campaign):
-    outcome = campaign.replay("JointController", [["instantiate"], ["_selftest", "sleep", 30]], 0.5)
+def test_an_unbounded_loop_is_a_hang_once_it_has_used_its_cpu_budget(campaign):
+    outcome = campaign.replay("JointController", [["instantiate"], ["_selftest", "spin", math.inf]], 0.3)
     assert [(f[0], f[1]) for f in outcome.findings] == [("hang", 1)]
+    assert "0.3 s of CPU time" in outcome.findings[0][2]
     assert outcome.seconds < 5
+
+
+def test_a_child_blocked_without_computing_is_a_hang_at_the_wall_clock_backstop(campaign):
+    outcome = campaign.replay("JointController", [["instantiate"], ["_selftest", "sleep", 30]], 0.5, backstop=1.0)
+    assert [(f[0], f[1]) for f in outcome.findings] == [("hang", 1)]
+    assert "wall-clock backstop" in outcome.findings[0][2]
+    assert outcome.seconds < 5
+
+
+def test_a_slow_but_bounded_call_on_a_loaded_core_is_no_hang(campaign):
+    # Three busy processes share one core with the child, which needs 0.3 s of
+    # CPU time within a 0.5 s budget: its wall time is well over the budget
+    # (a hang to a wall-clock rule), its CPU time is not.
+    core = min(os.sched_getaffinity(0))
+    hogs = [subprocess.Popen([sys.executable, "-c", f"import os; os.sched_setaffinity(0, {{{core}}})\nwhile True: pass"])
+            for _ in range(3)]
+    try:
+        time.sleep(0.2)  # the hogs are running
+        outcome = campaign.replay("JointController", [["instantiate"], ["_selftest", "pin", core],
+                                                      ["_selftest", "spin", 0.3], ["get", ["tau_d"]]], 0.5)
+    finally:
+        for hog in hogs:
+            hog.kill()
+            hog.wait()
+    assert outcome.seconds > 0.5, "the core was not loaded: the test shows nothing"
+    assert outcome.findings == [] and outcome.calls == 4
 
 
 def test_a_legal_run_has_no_finding(campaign):

@@ -25,6 +25,15 @@ REPRODUCERS = {
         "JointTorqueEstimator", [["instantiate"], ["deserialize", 0, ["foreign", "HarmonicDriveJoint"], 0]]),
     "a state-machine field edited to an invalid value": (
         "JointController", START + [["getstate", 0], ["serialize", 0, 0], ["deserialize", 0, ["state", 0, 64.0], 1]]),
+    # The 1,000-sequence run after the merge (docs/results/fuzz_after_merge): a
+    # state-machine field edited to another valid state deserialised (error
+    # or step complete edited to "instantiated"); the state's CRC-32 seal refuses it.
+    "controller: error state edited to instantiated (seed 121)": (
+        "JointController", [["instantiate"], ["get", ["i_m", "tau_ext", "theta_ref", "tau_d", "e_link"]],
+                            ["getstate", 0], ["serialize", 0, 2], ["deserialize", 2, ["state", 0, 1.0], 0]]),
+    "estimator: step complete edited to instantiated (seed 140)": (
+        "JointTorqueEstimator", START + [["step", 0.0, 1e-3], ["getstate", 0], ["serialize", 0, 0],
+                                         ["deserialize", 0, ["state", 0, 1.0], 1], ["setstate", 1]]),
     "a NaN field in a serialised state": (
         "JointTorqueEstimator", START + [["getstate", 0], ["serialize", 0, 0],
                                          ["deserialize", 0, ["nonfinite", 9, float("nan")], 1]]),
