@@ -4,8 +4,6 @@ import multiprocessing
 import os
 import threading
 
-import pytest
-
 from hdjoint import forked
 
 
@@ -13,16 +11,38 @@ def _pid_and_square(i):
     return os.getpid(), i * i
 
 
+def _in_single_threaded_process(job):
+    """job() in a forked process, where only one thread runs (the test
+    session's Dask cluster keeps threads in this one): its result or error."""
+    context = multiprocessing.get_context("fork")
+    queue = context.Queue()
+
+    def run():
+        try:
+            queue.put(("ok", os.getpid(), job()))
+        except Exception as e:  # noqa: BLE001 (handed to the test)
+            queue.put(("error", os.getpid(), repr(e)))
+    child = context.Process(target=run)
+    child.start()
+    out = queue.get(timeout=120)
+    child.join()
+    return out
+
+
 def test_results_in_order_and_from_other_processes():
-    out = forked.map_forked(_pid_and_square, 6, workers=2)
+    status, caller, out = _in_single_threaded_process(lambda: forked.map_forked(_pid_and_square, 6, workers=2))
+    assert status == "ok"
     assert [v for _, v in out] == [i * i for i in range(6)]
-    assert {pid for pid, _ in out} - {os.getpid()}, "no piece ran in a child"
+    assert {pid for pid, _ in out} - {caller}, "no piece ran in a child"
 
 
 def test_closures_over_unpicklable_state_run_in_children():
     # The diagnosis's pieces close over the prepared recording (never pickled).
     state = {"lock": threading.Lock(), "values": [3, 1, 4, 1, 5]}
-    assert forked.map_forked(lambda i: state["values"][i] * 2, 5, workers=2) == [6, 2, 8, 2, 10]
+    job = lambda: forked.map_forked(lambda i: (os.getpid(), state["values"][i] * 2), 5, workers=2)  # noqa: E731
+    status, caller, out = _in_single_threaded_process(job)
+    assert status == "ok" and [v for _, v in out] == [6, 2, 8, 2, 10]
+    assert {pid for pid, _ in out} - {caller}
 
 
 def test_an_error_in_a_piece_reaches_the_caller():
@@ -30,8 +50,8 @@ def test_an_error_in_a_piece_reaches_the_caller():
         if i == 3:
             raise ValueError("piece 3 failed")
         return i
-    with pytest.raises(ValueError, match="piece 3 failed"):
-        forked.map_forked(piece, 5, workers=2)
+    status, _, error = _in_single_threaded_process(lambda: forked.map_forked(piece, 5, workers=2))
+    assert status == "error" and "piece 3 failed" in error
 
 
 def test_no_fork_while_other_threads_run():
