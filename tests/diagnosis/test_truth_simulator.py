@@ -70,6 +70,28 @@ def test_simulated_motion_obeys_the_link_and_motor_equations():
     assert np.sqrt(np.mean((motor - tau)[inner] ** 2)) < 0.05 * scale
 
 
+def test_lugre_truth_keeps_the_rotors_inertia_while_sliding():
+    """LuGre bristles as stiff and damped as the benchmark draws them: while
+    the motor slides, the motion is the rotor's inertia and Coulomb friction.
+    The integrator once took the bristle damping's slope while sliding too,
+    which weighed the rotor by Jm + h*(sigma1 + sigma0*h): 2.25 Jm here, and
+    every LuGre control calibrated Jm to twice its value."""
+    form = Form(friction="lugre", substeps=10, lugre_sigma0=500.0)
+    form.lugre_sigma1 = 2.0 * math.sqrt(form.lugre_sigma0 * NOMINAL["Jm"])
+    setup = Setup(excitation="chirp", duration=6.0, motor_encoder=Encoder(0), link_encoder=Encoder(0),
+                  current_sensor=CurrentSensor(white=0.0))
+    rec = simulate(NOMINAL, form, setup, NOMINAL)
+    t, tau = rec.time, rec.extra["tau_joint"]
+    w_m = np.gradient(rec.theta_m, t)
+    a_m = np.gradient(w_m, t)
+    sliding = np.abs(w_m) > 3.0
+    sliding[:1500] = False  # after the fade-in
+    # Jm*a_m = Kt*i - Fc*sign(w) - Bm*w - tau/N: the inertia by least squares.
+    drive = (NOMINAL["Kt"] * rec.i_m - NOMINAL["Fc"] * np.sign(w_m) - NOMINAL["Bm"] * w_m - tau / NOMINAL["N"])
+    inertia = float(np.sum(drive[sliding] * a_m[sliding]) / np.sum(a_m[sliding] ** 2))
+    assert inertia == pytest.approx(NOMINAL["Jm"], rel=0.05)
+
+
 def test_transmitted_torque_follows_the_contracts_compliance_while_moving():
     """Along a trajectory, with strong structural damping and fine substeps
     (where differencing the wave generator's term once made the torque ring

@@ -146,7 +146,13 @@ class _Plant:
             s0, s1 = f.lugre_sigma0, f.lugre_sigma1
             g = physics.friction_level(p, f, self.omega_m, t, self.theta_m)
             zdot = self.omega_m - s0 * abs(self.omega_m) * self.z_fric / g
-            fric, c_m = s0 * self.z_fric + s1 * zdot + self.Bm * self.omega_m, s1 + self.Bm + s0 * h
+            # The friction's slope in omega_m over the step: the bristles take
+            # the motion only while they are not yet deflected to their
+            # sliding value (d(zdot)/d(omega) = 1 - s0*z*sign(omega)/g, 0 when
+            # sliding). Taking s1 + s0*h while sliding, as before, weighed the
+            # rotor by Jm + h*(s1 + s0*h): 2.25 Jm at the drawn s1 and h.
+            yielding = max(0.0, 1.0 - s0 * self.z_fric * math.copysign(1.0, self.omega_m) / g)
+            fric, c_m = s0 * self.z_fric + s1 * zdot + self.Bm * self.omega_m, (s1 + s0 * h) * yielding + self.Bm
         else:
             fric, c_m = self._motor_friction(t)
         wm = self.omega_m + h * (drive - fric - tau_f / self.N) / self.Jm / (1.0 + h * c_m / self.Jm)
