@@ -103,14 +103,17 @@ _FRICTION_PARAMETERS = ("Bm", "Fc", "omega_fc", "Fs", "omega_s", "Fc_drift")
 
 def smoothed_friction(prep: Prepared, p: dict) -> np.ndarray:
     """The motor friction as the motor equation sees it through the smoothing
-    filter: the law on the sharpest speed the encoders give, then smoothed.
-    Friction switches within a fraction of a millisecond at a reversal; its
-    smoothed value is a blurred step there, while the law on the smoothed
-    speed switches as sharply as the law itself. On a 3 Hz chirp the
-    difference was 0.2 N.m RMS in tau_M (10 times the noise floor)."""
+    filter: the law on the encoders' speed, then smoothed. Friction switches
+    within a fraction of a millisecond at a reversal; its smoothed value is a
+    step blurred over the filter there, while the law alone switches as
+    sharply as it does. On a 3 Hz chirp that difference was 0.2 N.m RMS in
+    tau_M (ten times the noise floor). (The law on a sharper, 2.5-sample
+    speed was closer on the chirp, but while the motor creeps below a count
+    per window that speed is quantisation, which a Stribeck term at
+    omega_s = 0.006 rad/s then fitted.)"""
     key = tuple(_get(p, n) for n in _FRICTION_PARAMETERS)
     if prep._friction is None or prep._friction[0] != key:
-        law = motor_friction(p, prep.kin.switching_speed, prep.t_rel)
+        law = motor_friction(p, prep.kin.omega_m, prep.t_rel)
         prep._friction = (key, prep.kin.smooth(law))
     return prep._friction[1]
 

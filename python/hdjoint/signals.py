@@ -25,14 +25,6 @@ class Kinematics:
     alpha_l: np.ndarray
     smooth: "callable"
     valid: np.ndarray
-    # The motor speed resolved as finely as the encoders allow (the shortest
-    # Gaussian, SHARP_SAMPLES): what a law that switches at zero speed
-    # (friction) is evaluated on before it goes through `smooth`.
-    omega_m_sharp: np.ndarray | None = None
-
-    @property
-    def switching_speed(self) -> np.ndarray:
-        return self.omega_m if self.omega_m_sharp is None else self.omega_m_sharp
 
 
 # Why Gaussian and not Savitzky-Golay: the speed and acceleration must be
@@ -43,7 +35,6 @@ class Kinematics:
 # joint's torsional mode reads as 30 % more inertia and a 2 ms current delay
 # (measured on simulated joints where neither is there).
 _TRUNCATE = 4.0  # kernel half-width in standard deviations
-SHARP_SAMPLES = 2.5  # the shortest Gaussian (samples) whose derivative still follows a quantised encoder
 
 
 def gaussian_kernels(sigma: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -72,7 +63,7 @@ class _UniformFilter:
         self.step = float(np.median(np.diff(t)))
         self.uniform = np.abs(np.diff(t) - self.step).max() <= 1e-3 * self.step
         self.grid = t if self.uniform else np.arange(t[0], t[-1] + self.step / 2, self.step)
-        self.sigma = max(sigma_s / self.step, SHARP_SAMPLES)  # samples
+        self.sigma = max(sigma_s / self.step, 2.5)  # samples
         self.kernels = gaussian_kernels(self.sigma)
         self.window = len(self.kernels[0])  # the kernel's support, samples
         if len(self.grid) < 2 * self.window:
@@ -114,11 +105,8 @@ def kinematics(rec: Recording, sigma_s: float = 0.006, starts: np.ndarray | None
     A 6 ms Gaussian (about 25 Hz bandwidth) turns a 4096-count encoder into a
     usable acceleration at 1 kHz while passing the joint's motion (a few Hz).
     `starts`: first sample of each contiguous window (default: one window)."""
-    starts = np.array([0]) if starts is None else np.asarray(starts)
-    f = _Filter(rec.time, sigma_s, starts)
-    sharp = _Filter(rec.time, 0.0, starts)  # SHARP_SAMPLES wide
-    return Kinematics(f(rec.theta_m, 1), f(rec.theta_m, 2), f(rec.theta_l, 1), f(rec.theta_l, 2), f, f.valid(),
-                      sharp(rec.theta_m, 1))
+    f = _Filter(rec.time, sigma_s, np.array([0]) if starts is None else np.asarray(starts))
+    return Kinematics(f(rec.theta_m, 1), f(rec.theta_m, 2), f(rec.theta_l, 1), f(rec.theta_l, 2), f, f.valid())
 
 
 REGIME_SIGMA = 0.025  # s: a regime (speed, load, acceleration) holds for tens of milliseconds
