@@ -37,6 +37,7 @@ from threadpoolctl import threadpool_limits
 from . import parameters
 from .calibration import RESIZE_Z, Calibrated, Prior, posterior_std, priors, robust_std
 from .channels import ESTIMATES, SMOOTHED_PARTS, Prepared, depends_on
+from .current_alignment import align_current
 from .forked import map_forked
 from .effects import ALWAYS_CALIBRATED, EFFECTS, Effect, calibrated_parameters, orthogonal_parameters, owner, testable
 from .recording import Recording
@@ -163,20 +164,32 @@ def joined(recordings: list[Recording]) -> tuple[Recording, np.ndarray, np.ndarr
     return rec, np.array(starts), np.concatenate(t_rel), np.concatenate(fold)
 
 
+# Parts with no model term for a constant torque: the current sensor's offset
+# (N*Kt*i_0) and the torque sensor's reach them as a constant that no
+# parameter can take (the transmission's a0 takes it there), and a few
+# hundredths of an ampere of it, traded against Kt, read as structure
+# against the torque level. Their channels' residuals are compared free of
+# their mean over the fit rows (profiled out, like a fitted offset).
+OFFSET_FREE_PARTS = {"motor", "link"}
+
+
 class Evaluator:
     """Torque estimates and channel residuals for a parameter set, with the
-    estimates of parts whose parameters did not change reused."""
+    estimates of parts whose parameters did not change reused. `offset_rows`:
+    the samples whose mean a channel of OFFSET_FREE_PARTS is compared free
+    of (default: every finite sample)."""
 
-    def __init__(self, prep: Prepared, channels: list[Channel]):
+    def __init__(self, prep: Prepared, channels: list[Channel], offset_rows: np.ndarray | None = None):
         self.prep = prep
         self.channels = channels
+        self.offset_rows = offset_rows
         self._cache: dict[str, tuple[tuple, np.ndarray]] = {}
         self.part_params = {part: depends_on(part) for part in ESTIMATES}
 
     def estimate(self, part: str, p: dict) -> np.ndarray:
         if part == "sensor":
             return self.prep.rec.tau_sensor
-        key = tuple(p.get(n, 0.0) for n in self.part_params[part])
+        key = tuple(p.get(n, 0.0) for n in self.part_params[part]) + (self.prep.current_shift,)
         hit = self._cache.get(part)
         if hit is not None and hit[0] == key:
             return hit[1]
@@ -195,18 +208,31 @@ class Evaluator:
         return reference
 
     def residual(self, channel: Channel, p: dict) -> np.ndarray:
-        return self.reference(channel, p) - self.estimate(channel.part, p)
+        r = self.reference(channel, p) - self.estimate(channel.part, p)
+        if not channel.parts() & OFFSET_FREE_PARTS:
+            return r
+        return r - _finite_mean(r if self.offset_rows is None else r[self.offset_rows])
 
     def residual_at(self, channel: Channel, p: dict, index: np.ndarray) -> np.ndarray:
         """The residual at `index` only: fits look at a sample of the training
         blocks, and the part being fitted need not be evaluated elsewhere."""
-        key = (id(index),) + tuple(p.get(n, 0.0) for n in self.part_params[channel.part])
+        key = (id(index), self.prep.current_shift) + tuple(p.get(n, 0.0) for n in self.part_params[channel.part])
         slot = f"{channel.part}@index"
         hit = self._cache.get(slot)
         if hit is None or hit[0] != key:
             hit = (key, ESTIMATES[channel.part](self.prep, p, index))
             self._cache[slot] = hit
-        return self.reference(channel, p)[index] - hit[1]
+        r = self.reference(channel, p)[index] - hit[1]
+        if not channel.parts() & OFFSET_FREE_PARTS:
+            return r
+        if index is not self.offset_rows:
+            return self.residual(channel, p)[index]
+        return r - _finite_mean(r)
+
+
+def _finite_mean(x: np.ndarray) -> float:
+    x = x[np.isfinite(x)]
+    return float(np.mean(x)) if len(x) else 0.0
 
 
 @dataclass
@@ -321,6 +347,7 @@ class Diagnosis:
         self.used = self.train | self.test
         self.stride = max(1, int(np.count_nonzero(self.train) // FIT_SAMPLES))
         self.fit_index = np.flatnonzero(self.train)[::self.stride]
+        self.eval.offset_rows = self.fit_index
         self.sigma = {c.name: 1.0 for c in self.channels}
         # Fit samples per independent one: the data's weight against the priors.
         self.data_weight = 1.0
@@ -328,6 +355,7 @@ class Diagnosis:
         self.calibrated_names: list[str] = []
         self._added_names: list[str] = []  # parameters of accepted findings
         self.not_testable: list[dict] = []
+        self.current_alignment: dict | None = None  # set by calibrate (current_alignment.py)
         self.orders_not_found: list[dict] = []  # effects at angle orders whose order search found none
         self.unconfirmed: list[Hypothesis] = []  # large held-out structure the simulated null cannot confirm
         self._orders_seen: list[Order] = []
@@ -428,10 +456,13 @@ class Diagnosis:
         self.priors = priors(names, self.nominal, self.tolerance, centres={"a0": p["a0"]})
         self.calibrated_names = names
         self._update_noise(p)
-        # Two passes: the noise scales come from the first pass's residuals.
-        for _ in range(2):
+        # Two passes: the noise scales come from the first pass's residuals,
+        # and the current's alignment (a property of the recording) from its parameters.
+        for first in (True, False):
             fit = self.fit(p, names, self.channels)
             p = fit.params
+            if first:
+                self.current_alignment = align_current(self, p)
             self._update_noise(p)
         return p, fit
 

@@ -109,6 +109,19 @@ def kinematics(rec: Recording, sigma_s: float = 0.006, starts: np.ndarray | None
     return Kinematics(f(rec.theta_m, 1), f(rec.theta_m, 2), f(rec.theta_l, 1), f(rec.theta_l, 2), f, f.valid())
 
 
+REGIME_SIGMA = 0.025  # s: a regime (speed, load, acceleration) holds for tens of milliseconds
+
+
+def regime_filter(rec: Recording, starts: np.ndarray | None = None, sigma_s: float = REGIME_SIGMA) -> "_Filter":
+    """A Gaussian over each window, slow enough that a measured signal through
+    it keeps its regime and loses its sample-to-sample noise (narrower where
+    a window is too short for it: its kernel must fit twice in each)."""
+    starts = np.array([0]) if starts is None else np.asarray(starts)
+    shortest = int(np.min(np.diff(np.append(starts, len(rec.time)))))
+    fits = (shortest / 2 - 2) / (2 * _TRUNCATE) * float(np.median(np.diff(rec.time)))
+    return _Filter(rec.time, min(sigma_s, fits), starts)
+
+
 def folds(n: int, count: int = 10) -> np.ndarray:
     """Contiguous blocks labelled 0..count-1 in turn: even labels fit, odd
     labels are held out, so both halves cover the whole run and every regime."""

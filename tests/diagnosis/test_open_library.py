@@ -4,6 +4,7 @@ positive held-out gain, and proposes nothing on a joint that matches its model."
 import pytest
 
 from hdjoint import parameters
+from hdjoint.current_alignment import align_current
 from hdjoint.diagnosis import Diagnosis
 from hdjoint.open_library import propose_terms
 from hdjoint.truth.physics import Form
@@ -14,9 +15,14 @@ EVERY_CHANNEL = [{"channel": name} for name in ("transmission", "motor", "link")
 
 
 def diagnosis_of(form: Form) -> Diagnosis:
-    """A short recording of the independent truth with `form`, otherwise the nominal joint."""
+    """A short recording of the independent truth with `form`, otherwise the
+    nominal joint, its current aligned with the encoders as calibration does
+    before any term is proposed (the truth's drive holds its current over a
+    sample: unaligned, that reads as N*Kt/2*(i_m[t-1] - i_m))."""
     rec = simulate(dict(NOMINAL, Df=4.0), form, Setup(excitation="multisine", duration=8.0, seed=3), NOMINAL)
-    return Diagnosis(rec, NOMINAL)
+    diag = Diagnosis(rec, NOMINAL)
+    align_current(diag, NOMINAL)
+    return diag
 
 
 def proposals(form: Form) -> dict[str, dict]:
