@@ -41,12 +41,11 @@ def test_controls_are_consistent(name):
         strict=True, reason="MAP calibration leaves the warm-up's held-out gain uneven over folds")),
     # These three need the benchmark's 30 s: at 20 s their held-out gain
     # is not yet significant fold by fold (the verdict is then consistent).
-    # A regression of the calibrated evidence (issue 10): with the priors and
-    # the simulated null, the Bouc-Wen truth's structure stays but no named
-    # hypothesis is accepted, so the verdict is `unexplained` (found when the
-    # branches were merged). Strict: fails once fixed.
-    pytest.param("hysteresis", "hysteresis", 30.0, marks=pytest.mark.xfail(
-        strict=True, reason="the Bouc-Wen hysteresis is left unexplained under the calibrated evidence")),
+    # Hysteresis (Bouc-Wen truth) was left `unexplained` under the calibrated
+    # evidence until the motor and link channels were compared free of a
+    # constant and their friction went through the smoothing filter
+    # (branch diag-controls): named again.
+    ("hysteresis", "hysteresis", 30.0),
     ("Stribeck friction", "stribeck_friction", 30.0),
     ("time delay", "time_delay", 30.0),
 ])
