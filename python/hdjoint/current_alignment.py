@@ -28,6 +28,18 @@ from scipy.stats import norm
 from .calibration import INTERVAL
 
 
+def fit_shift(residual, step: float) -> tuple[float, float]:
+    """The least-squares shift in [-step/2, 0] of `residual(shift)` (a vector,
+    linear in the shift within one sample) and the curvature of its sum of squares."""
+    held = -0.5 * step
+    r0, r1 = residual(0.0), residual(held)
+    finite = np.isfinite(r0) & np.isfinite(r1)  # NaN where the torsion is singular
+    r0, slope = r0[finite], (r1[finite] - r0[finite]) / held
+    curvature = float(slope @ slope)
+    estimate = float(np.clip(-(r0 @ slope) / curvature, held, 0.0)) if curvature > 0 else 0.0
+    return estimate, curvature
+
+
 def align_current(diag, p: dict) -> dict | None:
     """Fit the recording's current shift on the motor channels at parameters
     `p`, leave it in diag.prep.current_shift, and describe it (None: no motor channel)."""
@@ -41,10 +53,7 @@ def align_current(diag, p: dict) -> dict | None:
         diag.prep.current_shift = shift
         return diag._normalised(p, channels, diag.fit_index)
 
-    r0 = residual(0.0)
-    slope = (residual(held) - r0) / held
-    curvature = float(slope @ slope)
-    estimate = float(np.clip(-(r0 @ slope) / curvature, held, 0.0)) if curvature > 0 else 0.0
+    estimate, curvature = fit_shift(residual, step)
     diag.prep.current_shift = estimate
     # Laplace on the data term (weighted as the calibration's), flat within the bounds.
     std = 1.0 / math.sqrt(diag.data_weight * curvature) if curvature > 0 else math.inf

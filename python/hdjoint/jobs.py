@@ -118,8 +118,8 @@ def diagnose_to_directory(recording, params, out, validate=(), time_unit: str | 
         result, doc = diagnose(recs if len(recs) > 1 else recs[0], nominal, progress=_progress, tolerance=tolerance)
         if others:
             _progress("checking the corrected model on the other recordings")
-            doc["validation"] = [validate_on(o, result.nominal, result.calibrated_params, doc["params"])
-                                 for o in others]
+            doc["validation"] = [validate_on(o, result.nominal, result.calibrated_params, doc["params"],
+                                             fitted_on=result.engine.prep) for o in others]
     except DiagnosisError as e:
         raise UserError(str(e)) from None
     page = report.build(result, doc)

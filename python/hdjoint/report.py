@@ -103,7 +103,16 @@ def _recording_text(doc: dict) -> str:
     parts = [f"{r['path'] or 'recording'} ({r['samples']} samples, {r['duration']:.1f} s)" for r in recordings]
     sensor = "with" if doc["recording"]["torque_sensor"] else "without"
     return (f"Recording{'s fitted jointly' if len(parts) > 1 else ''}: {'; '.join(parts)}, {sensor} a torque sensor; "
-            f"{doc['recording']['analysed_samples']} samples analysed")
+            f"{doc['recording']['analysed_samples']} samples analysed" + _alignment_text(doc["recording"]))
+
+
+def _alignment_text(recording: dict) -> str:
+    a = recording.get("current_alignment")
+    if not a:
+        return ""
+    return (f"; the current acting at each encoder sample is the one logged {-a['estimate'] * 1e3:.2f} ms before it "
+            f"(95 % interval {-a['hi'] * 1e3:.2f} to {-a['lo'] * 1e3:.2f} ms; "
+            f"{-a['bounds'][0] * 1e3:.2f} ms is a current held over each sample)")
 
 
 def _validation_section(entries: list[dict]) -> str:
@@ -119,8 +128,20 @@ def _validation_section(entries: list[dict]) -> str:
                              _fmt(e["corrected"][name]["rms"]), "", _fmt(e["corrected"][name]["max"])))
     return ("<h2>Other recordings (never fitted)</h2><p>The corrected model on recordings the diagnosis did not "
             "see: residual per channel with the nominal, the calibrated (no findings) and the corrected "
-            "parameters.</p>" + _table(rows, ["recording", "channel", "RMS nominal", "RMS calibrated",
-                                                "RMS corrected", "max calibrated", "max corrected"]))
+            "parameters, each with the encoder zero and the current alignment placed on that recording.</p>"
+            + _table(rows, ["recording", "channel", "RMS nominal", "RMS calibrated",
+                            "RMS corrected", "max calibrated", "max corrected"])
+            + _extrapolation_notes(entries))
+
+
+def _extrapolation_notes(entries: list[dict]) -> str:
+    """A sentence per recording that leaves the fitted operating range: its figures test the model's form there."""
+    notes = [f"<li><b>{html.escape(str(v['path']))}</b>: {html.escape(q['warning'])}</li>"
+             for v in entries for q in v.get("extrapolation", []) if q.get("warning")]
+    if not notes:
+        return ""
+    return ("<p>Extrapolated: these recordings go where the diagnosed one did not, so their figures test "
+            "the model's form there rather than its fitted parameters.</p><ul>" + "".join(notes) + "</ul>")
 
 
 def build(result, doc: dict) -> str:

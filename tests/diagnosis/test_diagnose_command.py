@@ -71,7 +71,12 @@ def test_the_corrected_model_fits_a_recording_it_never_saw(gravity_case):
         assert row["corrected"]["rms"] <= 1.05 * row["calibrated"]["rms"]
     est = entry["estimator"]
     assert est["corrected"]["tau_compliance"]["rms"] <= est["nominal"]["tau_compliance"]["rms"]
-    assert "Other recordings (never fitted)" in (gravity_case / "out" / "report.html").read_text()
+    page = (gravity_case / "out" / "report.html").read_text()
+    assert "Other recordings (never fitted)" in page
+    # What belongs to the other recording is placed on it, and its operating range is compared.
+    assert set(entry["current_alignment"]) == {"nominal", "calibrated", "corrected"}
+    assert {q["quantity"] for q in entry["extrapolation"]} == {"motor speed", "motor current", "link angle"}
+    assert "the current acting at each encoder sample is the one logged" in page
 
 
 def test_a_malformed_validation_recording_is_refused_before_any_work(gravity_case, tmp_path, capsys):
