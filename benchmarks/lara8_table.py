@@ -34,6 +34,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from diagnosis_independent import _commit, _machine  # noqa: E402  (the same stamp on every table)
 
 from hdjoint import parameters  # noqa: E402
+from hdjoint.channels import Prepared  # noqa: E402
 from hdjoint.effects import KINEMATIC_EQ7  # noqa: E402
 from hdjoint.jobs import UserError, diagnose_to_directory  # noqa: E402
 from hdjoint.recording import read_recording, write_recording  # noqa: E402
@@ -162,11 +163,13 @@ def run_joint(joint: str, files: list[str], data: Path, tmp: Path) -> list[dict]
                "kinematic_calibration": {key: calibration[key] for key in KINEMATIC_EQ7 if key in calibration},
                "kinematic_error_says": kinematic_error_says(doc),
                "proposed_terms": doc.get("proposed_terms", []), "seconds": doc.get("seconds"), "validation": []}
+        fitted = rec
         if len(recs) > 1:
             other = recs[1 - k]
             row["validated_on"] = files[1 - k]
         else:
             first, other = halves(rec)
+            fitted = first
             row["validated_on"] = f"second half of {name} (diagnosed on its first half)"
             turns = float(np.ptp(first.theta_m)) / (2 * math.pi)
             if turns < 1.0:
@@ -180,7 +183,8 @@ def run_joint(joint: str, files: list[str], data: Path, tmp: Path) -> list[dict]
                 row["validated_on"] = f"none: only one recording of this joint, and its first half is {reason}"
                 other = None
         if other is not None:
-            row["validation"] = [validate(other, nominal_for(n), calibrated_set(nominal_for(n), calibration), doc["params"])]
+            row["validation"] = [validate(other, nominal_for(n), calibrated_set(nominal_for(n), calibration), doc["params"],
+                                          fitted_on=Prepared(fitted, kinematics(fitted), fitted.time - fitted.time[0]))]
         rows.append(row)
         print(f"{name}: {row['verdict']} {[f['effect'] for f in row['findings']]}", flush=True)
     return rows
@@ -237,6 +241,9 @@ def _verdict_row(r: dict) -> list:
                     for k, v in r["kinematic_calibration"].items() if v["nominal"]) or "not calibrated"
     val = "; ".join(f"{ch}: {row['nominal']['rms']:.3f} -> {row['calibrated']['rms']:.3f} -> "
                     f"{row['corrected']['rms']:.3f}" for v in r["validation"] for ch, row in v["channels"].items())
+    beyond = ", ".join(f"{q['quantity']} {q['outside']:.0%}" for v in r["validation"]
+                       for q in v.get("extrapolation", []) if q.get("warning"))
+    val += f" (extrapolated, samples beyond the fitted range: {beyond})" if beyond else ""
     return [r["recording"], f"{r['N']} ({r['N_encoders']})", r["verdict"], found, r["kinematic_error_says"], kin,
             r["validated_on"], val or "-"]
 
