@@ -175,7 +175,7 @@ EFFECTS: dict[str, Effect] = {e.id: e for e in [
 # nominal set has them, and a few percent of error in them must not be
 # mistaken for missing physics.
 ALWAYS_CALIBRATED = {
-    "transmission": ("a0", "Kf"),
+    "transmission": ("a0", "Kf", "Df"),  # Df: structural damping, which every real flexspline has
     "motor": ("Kt", "Jm"),
     "link": ("Jl", "Bl"),
 }
