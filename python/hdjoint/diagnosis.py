@@ -256,6 +256,7 @@ class Hypothesis:
     delta_bic: float
     orders: list[Order] = field(default_factory=list)
     worst_channel_ratio: float = 1.0  # largest held-out MSE after/before over the effect's channels
+    degenerate: str | None = None  # why the fit is not the effect it stands for (Effect.degenerate)
     p_raw: float = 1.0
     p_value: float = 1.0  # Benjamini-Hochberg adjusted over the round
 
@@ -271,7 +272,7 @@ class Hypothesis:
 
     def _held_out_evidence(self) -> bool:
         folds_better = np.mean(self.gain.fold_gains > 0)
-        return (self.gain.gain > 0.003 and self.gain.z > 3.0 and self.delta_bic < -10.0 and folds_better >= 0.7
+        return (not self.degenerate and self.gain.gain > 0.003 and self.gain.z > 3.0 and self.delta_bic < -10.0 and folds_better >= 0.7
                 and self.worst_channel_ratio <= 1.0)
 
 
@@ -558,7 +559,8 @@ class Diagnosis:
         n_eff = np.count_nonzero(self.train) / self._correlation_length(p)
         mse_b, mse_a = np.mean(before[self.train]), np.mean(after[self.train])
         dbic = n_eff * math.log(max(mse_a, 1e-300) / max(mse_b, 1e-300)) + len(names) * math.log(n_eff)
-        hypothesis = Hypothesis(effect, p, fit.params, names, gain, float(dbic), orders, worst_channel_ratio=worst)
+        hypothesis = Hypothesis(effect, p, fit.params, names, gain, float(dbic), orders, worst_channel_ratio=worst,
+                                degenerate=effect.degenerate(fit.params, self._torsion_span(p)))
         # The simulated null: the same test on noise with the residual's colour,
         # the hypothesis linearised at its fit.
         rows = [self.channels.index(c) for c in channels]
@@ -566,6 +568,11 @@ class Diagnosis:
         z_null = null_z(self._noise.replicates(rows), jac, self.fit_index, self.fold, self.test)
         hypothesis.p_raw = p_value(gain.z, z_null)
         return hypothesis
+
+    def _torsion_span(self, p: dict) -> float:
+        """The torsion the reference torque spans (5-95 %), rad."""
+        torque = self.reference_torque(p)[self.used]
+        return float(np.nanpercentile(torque, 95) - np.nanpercentile(torque, 5)) / p["Kf"]
 
     def _try_all(self, candidates: list[Effect], p: dict) -> list[Hypothesis]:
         """Every candidate's hypothesis, fitted side by side (forked.py): the
@@ -612,7 +619,8 @@ class Diagnosis:
             tried.sort(key=lambda h: -h.gain.gain)
             self.tested.append([{"effect": h.effect.id, "held_out_gain": round(h.gain.gain, 5),
                                  "z": round(h.gain.z, 2), "p_value": h.p_value, "delta_bic": round(h.delta_bic, 1),
-                                 "accepted": h.accepted()} for h in tried])
+                                 "accepted": h.accepted(), **({"degenerate": h.degenerate} if h.degenerate else {})}
+                                for h in tried])
             accepted = [h for h in tried if h.accepted()]
             if not accepted:
                 self.unconfirmed = [h for h in tried if h.unconfirmed()]
