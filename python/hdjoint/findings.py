@@ -179,7 +179,8 @@ def _interval(fit_std: dict, params: dict, name: str) -> list[float] | None:
 
 
 def _alternative(h, share: float) -> dict:
-    return {"effect": h.effect.id, "evidence_share": round(share, 3), "held_out_gain": round(h.gain.gain, 5),
+    return {"effect": h.effect.id, "physics": h.effect.physics, "evidence_share": round(share, 3),
+            "held_out_gain": round(h.gain.gain, 5),
             "p_value": h.p_value, "parameters": {n: h.params_after[n] for n in _reported(h.fitted)}}
 
 
@@ -207,6 +208,12 @@ def finding_document(result, f) -> dict:
         "runner_up": ({"effect": f.runner_up.effect.id, "held_out_gain": round(f.runner_up.gain.gain, 5)}
                       if f.runner_up else None),
     }
+    if f.steady_evidence is not None:
+        e = f.steady_evidence
+        out["evidence"]["at_held_slow_speeds"] = {
+            "share_of_held_out_samples": round(e.held_share, 3), "held_out_gain": _finite(e.gain, 4),
+            "z": _finite(e.z, 2), "folds": e.folds, "share_of_the_gain": round(e.steady_share, 3),
+            "tells_apart_from_smoothing": e.separates}
     out["parameters"] = {n: final_params[n] for n in _reported(f.fitted)}
     out["intervals"] = {n: _interval(diag.last_fit.std, final_params, n) for n in f.fitted}
     if f.kind == "ambiguous":
@@ -244,6 +251,10 @@ def document(result) -> dict:
     if len(recordings) > 1:
         doc["recordings"] = recordings
     return doc
+
+
+def _finite(x: float, digits: int) -> float | None:
+    return round(float(x), digits) if np.isfinite(x) else None
 
 
 def _reported(fitted) -> list[str]:
