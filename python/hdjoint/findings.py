@@ -9,6 +9,7 @@ import numpy as np
 from . import _core, parameters
 from .metrics import error_figures
 from .calibration import INTERVAL
+from .cannot_tell import cannot_tell
 from .significance import FALSE_DISCOVERY_RATE, NullNoise, benjamini_hochberg, null_z, p_value
 from .signals import regime_filter
 from .structure import scan
@@ -242,6 +243,7 @@ def document(result) -> dict:
         "hypotheses_tested": result.tested,
         "false_discovery_rate": FALSE_DISCOVERY_RATE,
         "unexplained": result.unexplained,
+        "cannot_tell": cannot_tell(result),
         "located": result.located,
         "noise": {c: round(s, 6) for c, s in result.sigma.items()},
         "estimator": estimator_comparison(diag, result.params),
@@ -250,6 +252,9 @@ def document(result) -> dict:
     }
     if len(recordings) > 1:
         doc["recordings"] = recordings
+    if verdict == "consistent" and doc["cannot_tell"]:
+        doc["verdict_note"] = ("consistent as far as this recording can tell; it cannot tell " +
+                               ", ".join(x.get("effect") or x["parameter"] for x in doc["cannot_tell"]))
     return doc
 
 

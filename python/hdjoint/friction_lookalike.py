@@ -25,9 +25,11 @@ from .signals import Kinematics
 
 # The speed range a Stribeck rise is tested over (the effect's `revealed_by`).
 STRIBECK_SPEEDS = (0.5, 20.0)  # rad/s
-# A sample is at a held speed when the speed changes by less than its own
-# size over this time, and the last reversal is at least this long ago.
+# A sample is at a held speed when the speed would change by less than
+# HELD_CHANGE of itself over HELD_FOR, and the last reversal is at least
+# HELD_FOR ago (a 3 Hz swing through zero is never held).
 HELD_FOR = 0.1  # s
+HELD_CHANGE = 0.2
 MIN_HELD_SAMPLES = 20  # per held-out fold that counts
 MIN_HELD_FOLDS = 4
 # Stribeck is told apart from the look-alike when its gain at held speeds
@@ -51,10 +53,11 @@ class SteadyEvidence:
 
 def held_speed(kin: Kinematics, time: np.ndarray) -> np.ndarray:
     """Samples whose motor speed is held in the Stribeck range: in range, not
-    changing by its own size within HELD_FOR, and HELD_FOR past the last reversal."""
+    changing by more than HELD_CHANGE of itself within HELD_FOR, and HELD_FOR
+    past the last reversal."""
     speed = np.abs(kin.omega_m)
     lo, hi = STRIBECK_SPEEDS
-    steady = (speed >= lo) & (speed <= hi) & (np.abs(kin.alpha_m) * HELD_FOR < speed)
+    steady = (speed >= lo) & (speed <= hi) & (np.abs(kin.alpha_m) * HELD_FOR < HELD_CHANGE * speed)
     sign = np.sign(kin.omega_m)
     flips = np.flatnonzero(np.diff(sign) != 0) + 1
     since = np.full(len(time), np.inf)
