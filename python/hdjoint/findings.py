@@ -9,6 +9,7 @@ import numpy as np
 from . import _core, parameters
 from .metrics import error_figures
 from .calibration import INTERVAL
+from .cannot_tell import cannot_tell
 from .significance import FALSE_DISCOVERY_RATE, NullNoise, benjamini_hochberg, null_z, p_value
 from .signals import regime_filter
 from .structure import scan
@@ -179,7 +180,8 @@ def _interval(fit_std: dict, params: dict, name: str) -> list[float] | None:
 
 
 def _alternative(h, share: float) -> dict:
-    return {"effect": h.effect.id, "evidence_share": round(share, 3), "held_out_gain": round(h.gain.gain, 5),
+    return {"effect": h.effect.id, "physics": h.effect.physics, "evidence_share": round(share, 3),
+            "held_out_gain": round(h.gain.gain, 5),
             "p_value": h.p_value, "parameters": {n: h.params_after[n] for n in _reported(h.fitted)}}
 
 
@@ -207,6 +209,12 @@ def finding_document(result, f) -> dict:
         "runner_up": ({"effect": f.runner_up.effect.id, "held_out_gain": round(f.runner_up.gain.gain, 5)}
                       if f.runner_up else None),
     }
+    if f.steady_evidence is not None:
+        e = f.steady_evidence
+        out["evidence"]["at_held_slow_speeds"] = {
+            "share_of_held_out_samples": round(e.held_share, 3), "held_out_gain": _finite(e.gain, 4),
+            "z": _finite(e.z, 2), "folds": e.folds, "share_of_the_gain": round(e.steady_share, 3),
+            "tells_apart_from_smoothing": e.separates}
     out["parameters"] = {n: final_params[n] for n in _reported(f.fitted)}
     out["intervals"] = {n: _interval(diag.last_fit.std, final_params, n) for n in f.fitted}
     if f.kind == "ambiguous":
@@ -235,6 +243,7 @@ def document(result) -> dict:
         "hypotheses_tested": result.tested,
         "false_discovery_rate": FALSE_DISCOVERY_RATE,
         "unexplained": result.unexplained,
+        "cannot_tell": cannot_tell(result),
         "located": result.located,
         "noise": {c: round(s, 6) for c, s in result.sigma.items()},
         "estimator": estimator_comparison(diag, result.params),
@@ -243,7 +252,14 @@ def document(result) -> dict:
     }
     if len(recordings) > 1:
         doc["recordings"] = recordings
+    if verdict == "consistent" and doc["cannot_tell"]:
+        doc["verdict_note"] = ("consistent as far as this recording can tell; it cannot tell " +
+                               ", ".join(x.get("effect") or x["parameter"] for x in doc["cannot_tell"]))
     return doc
+
+
+def _finite(x: float, digits: int) -> float | None:
+    return round(float(x), digits) if np.isfinite(x) else None
 
 
 def _reported(fitted) -> list[str]:

@@ -91,7 +91,12 @@ def _summary(doc: dict) -> str:
     items.append("<p><b>Unexplained:</b> " + (html.escape("; ".join(
         f"{u['channel']} channel against {u['feature']} (held-out gain {u['held_out_gain']:.3g})"
         for u in doc["unexplained"])) if doc["unexplained"] else "nothing") + ".</p>")
+    if doc.get("cannot_tell"):
+        items.append("<p><b>This recording cannot tell:</b> " + html.escape("; ".join(
+            f"{x.get('effect') or x['parameter']}: {x['why']}" for x in doc["cannot_tell"])) + ".</p>")
     advice = [f["separate_by"] for f in doc["findings"] if f.get("separate_by")]
+    advice += [f"To settle {x['effect']}, record {x['record']}." for x in doc.get("cannot_tell", [])
+               if x.get("effect") and x["record"]]
     advice += [f"To test {n['effect']}, record a motion that removes this: {n['reason']}." for n in doc["not_testable"]]
     items.append("<p><b>What to record next:</b> " + (html.escape(" ".join(advice)) if advice
                                                       else "nothing needed to settle these findings") + "</p>")

@@ -69,17 +69,15 @@ def test_a_short_lara8_jog_says_why_it_cannot_name_the_kinematic_error():
 
 
 @pytest.mark.slow
-# On the merge with diag-controls, which compares the link channel free of
-# its mean (sensor offsets), a load that never changes sign is mostly that
-# mean: gravity_load explains 31 % held out (p = 0.048) but is not accepted,
-# below the 50 % of the unconfirmed rule, and joint2 is `consistent` again.
-# Strict: fails once fixed.
-@pytest.mark.xfail(strict=True, reason="the mean-free link channel hides joint2's static load (consistent again)")
 def test_a_residual_the_simulated_null_cannot_judge_is_not_called_consistent():
     """joint2: 4 s, the link torque (80-160 N.m) missing from a nominal set
     without gravity. gravity_load explains most of the held-out link residual,
     but the residual is one slow swing, and its phase-randomised copies are
-    explained as well: the null cannot confirm it. That is not `consistent`."""
+    explained as well: the null cannot confirm it. That is not `consistent`.
+    Without a torque sensor the link channel keeps its mean (a0 owns the
+    transmission's constant); compared free of it, this load that never
+    changes sign was hidden (gravity 31 % held out, p = 0.048) and the
+    verdict was `consistent` (diagnosis.free_of_mean)."""
     rec = lara8_table.read_joint(DATA / "joint2_jog_joint_mass.csv")
     _, doc = diagnose(rec, lara8_table.nominal_for(lara8_table.TOOTH_RATIO["joint2"]))
     gravity = next(h for h in doc["hypotheses_tested"][-1] if h["effect"] == "gravity_load")

@@ -1,0 +1,42 @@
+"""A `consistent` verdict says what the recording could not tell
+(cannot_tell.py): hypotheses with held-out gain and the training data's
+support that the folds do not agree on, and constants of the joint that
+calibration moved far beyond their tolerance."""
+from types import SimpleNamespace
+
+from hdjoint.calibration import Calibrated, Prior
+from hdjoint.cannot_tell import cannot_tell
+
+
+def _tested(effect, gain, z, dbic, accepted=False, p=0.5):
+    return {"effect": effect, "held_out_gain": gain, "z": z, "p_value": p, "delta_bic": dbic, "accepted": accepted}
+
+
+def _result(last_round, calibration=(), unexplained=()):
+    return SimpleNamespace(tested=[last_round], unexplained=list(unexplained),
+                           calibration={c.name: c for c in calibration})
+
+
+def test_a_sweeps_coulomb_friction_and_its_absorbed_inertia_are_said():
+    # seed 2's sweep with Coulomb friction missing, as measured (docs/diagnosis.md)
+    result = _result([_tested("coulomb_friction", 0.2848, -1.24, -12197.2),
+                      _tested("backlash", -0.0, 0.71, 9.6)],
+                     [Calibrated("Jm", 2.09e-5, 8.39e-5, 1e-6, Prior(2.09e-5, 2.09e-6)),
+                      Calibrated("Kt", 0.045, 0.046, 1e-3, Prior(0.045, 0.00225))])
+    said = cannot_tell(result)
+    assert [x.get("effect") or x["parameter"] for x in said] == ["coulomb_friction", "Jm"]
+    assert "constant-speed runs" in said[0]["record"] and "4.01x" in said[1]["why"]
+
+
+def test_nothing_supported_nothing_moved_nothing_said():
+    result = _result([_tested("coulomb_friction", 0.01, 1.0, -50.0), _tested("backlash", 0.2, 1.0, 5.0),
+                      _tested("viscous_friction", 0.3, 5.0, -500.0, accepted=True)],
+                     # Bm belongs to viscous friction: a resized finding's business, not this list's
+                     [Calibrated("Bm", 3e-5, 3e-4, 1e-6, Prior(3e-5, 1.5e-5))])
+    assert cannot_tell(result) == []
+
+
+def test_an_unconfirmed_hypothesis_already_unexplained_is_not_said_twice():
+    result = _result([_tested("gravity_load", 0.96, 80.0, -900.0, p=0.36)],
+                     unexplained=[{"feature": "what gravity_load would explain (the simulated null cannot confirm it)"}])
+    assert cannot_tell(result) == []
