@@ -166,7 +166,7 @@ ESTIMATES = {"transmission": tau_transmission, "motor": tau_motor, "link": tau_l
 # What each estimate reads, for caching: keep in step with the functions
 # above (tests/test_diagnosis_internals.py fails when a parameter is missing).
 _MOTOR_PARAMETERS = ("N", "Kt", "Jm") + _FRICTION_PARAMETERS + ("cog_order", "cog_a", "cog_b", "i_delay")
-_LINK_PARAMETERS = ("N", "Jl", "Bl", "mgl", "Fl", "omega_fc")
+_LINK_PARAMETERS = ("Jl", "Bl", "mgl", "Fl", "omega_fl")
 
 
 def depends_on(part: str) -> tuple[str, ...]:
