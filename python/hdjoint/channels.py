@@ -72,17 +72,24 @@ def _get(p: dict, name: str) -> float:
 def tau_transmission(prep: Prepared, p: dict[str, float], index: np.ndarray | None = None) -> np.ndarray:
     """tau_T: the compliance model over the recording (NaN where the torsion is singular).
 
+    At the encoders' instants: the current is realigned by i_delay (it enters
+    through the wave generator's torque), and the compliance model runs with
+    no delay line. (The estimator's delay line pairs each current with the
+    angles i_delay earlier, so its output lags by i_delay: compared with a
+    torque sensor sampled with the encoders, that lag put a 2 ms delay's
+    worth of error into the transmission channel, which Kf, Cf and eq. (7)
+    then absorbed; a time delay's corrected set failed on the next recording.)
+
     With `index`, only those samples (and only when the model is stateless
-    there: no hysteresis, no delay; otherwise the whole run, then indexed)."""
+    there: no hysteresis; otherwise the whole run, then indexed)."""
     rec = prep.rec
-    if index is not None and (_get(p, "hys_H") > 0.0 or _get(p, "i_delay") > 0.0):
-        return tau_transmission(prep, p)[index]
-    if index is not None:
-        return _core.compliance(parameters.for_estimator(p), rec.i_m[index], rec.theta_m[index],
-                                rec.theta_l[index])["tau_compliance"]
-    native = parameters.for_estimator(p)
-    return prep.per_window(lambda i, tm, tl: _core.compliance(native, i, tm, tl)["tau_compliance"],
-                           rec.i_m, rec.theta_m, rec.theta_l)
+    current = delayed_current(prep, _get(p, "i_delay"))
+    native = parameters.for_estimator(dict(p, i_delay=0.0))
+    if index is not None and _get(p, "hys_H") <= 0.0:
+        return _core.compliance(native, current[index], rec.theta_m[index], rec.theta_l[index])["tau_compliance"]
+    whole = prep.per_window(lambda i, tm, tl: _core.compliance(native, i, tm, tl)["tau_compliance"],
+                            current, rec.theta_m, rec.theta_l)
+    return whole if index is None else whole[index]
 
 
 def _native(p: dict[str, float]) -> dict[str, float]:
