@@ -101,8 +101,16 @@ def tau_transmission(prep: Prepared, p: dict[str, float], index: np.ndarray | No
     """tau_T: the compliance model over the recording (NaN where the torsion
     is singular), plus the structural damping Df when p has it.
 
+    At the encoders' instants: the current is realigned by i_delay (it enters
+    through the wave generator's torque), and the compliance model runs with
+    no delay line. (The estimator's delay line pairs each current with the
+    angles i_delay earlier, so its output lags by i_delay: compared with a
+    torque sensor sampled with the encoders, that lag put a 2 ms delay's
+    worth of error into the transmission channel, which Kf, Cf and eq. (7)
+    then absorbed; a time delay's corrected set failed on the next recording.)
+
     With `index`, only those samples (and only when the model is stateless
-    there: no hysteresis, no delay; otherwise the whole run, then indexed)."""
+    there: no hysteresis; otherwise the whole run, then indexed)."""
     tau = _compliance_torque(prep, p, index)
     if not _get(p, "Df"):
         return tau
@@ -117,26 +125,25 @@ def hysteresis_torque(prep: Prepared, p: dict) -> np.ndarray:
     a loop of 0.1 N.m switches (H/sigma, 3e-6 rad at sigma = 3e4): driven by
     the raw increments, the modelled loop flips with every count of
     quantisation noise, which it then cannot fit."""
-    rec, native = prep.rec, parameters.for_estimator(p)
+    rec, native = prep.rec, parameters.for_estimator(dict(p, i_delay=0.0))
     theta_m, theta_l = prep.smoothed("theta_m", rec.theta_m), prep.smoothed("theta_l", rec.theta_l)
     return prep.per_window(lambda i, tm, tl: _core.compliance(native, i, tm, tl)["hysteresis_torque"],
-                           rec.i_m, theta_m, theta_l)
+                           delayed_current(prep, _get(p, "i_delay")), theta_m, theta_l)
 
 
 def _compliance_torque(prep: Prepared, p: dict[str, float], index: np.ndarray | None = None) -> np.ndarray:
-    """The estimator's compliance model (C++) over the recording, or at `index`."""
-    rec = prep.rec
+    """The estimator's compliance model (C++) at the encoders' instants, over
+    the recording or at `index`: its current realigned by i_delay, no delay line."""
     if _get(p, "hys_H") > 0.0:
         z = hysteresis_torque(prep, p)
         return _compliance_torque(prep, dict(p, hys_H=0.0), index) + (z if index is None else z[index])
-    if index is not None and (_get(p, "hys_H") > 0.0 or _get(p, "i_delay") > 0.0):
-        return _compliance_torque(prep, p)[index]
+    rec = prep.rec
+    current = delayed_current(prep, _get(p, "i_delay"))
+    native = parameters.for_estimator(dict(p, i_delay=0.0))
     if index is not None:
-        return _core.compliance(parameters.for_estimator(p), rec.i_m[index], rec.theta_m[index],
-                                rec.theta_l[index])["tau_compliance"]
-    native = parameters.for_estimator(p)
+        return _core.compliance(native, current[index], rec.theta_m[index], rec.theta_l[index])["tau_compliance"]
     return prep.per_window(lambda i, tm, tl: _core.compliance(native, i, tm, tl)["tau_compliance"],
-                           rec.i_m, rec.theta_m, rec.theta_l)
+                           current, rec.theta_m, rec.theta_l)
 
 
 def _native(p: dict[str, float]) -> dict[str, float]:
@@ -220,7 +227,7 @@ ESTIMATES = {"transmission": tau_transmission, "motor": tau_motor, "link": tau_l
 # What each estimate reads, for caching: keep in step with the functions
 # above (tests/test_diagnosis_internals.py fails when a parameter is missing).
 _MOTOR_PARAMETERS = ("N", "Kt", "Jm") + _FRICTION_PARAMETERS + ("cog_order", "cog_a", "cog_b", "i_delay")
-_LINK_PARAMETERS = ("N", "Jl", "Bl", "mgl", "Fl", "omega_fc")
+_LINK_PARAMETERS = ("Jl", "Bl", "mgl", "Fl", "omega_fl")
 
 
 def depends_on(part: str) -> tuple[str, ...]:

@@ -62,6 +62,9 @@ ANALYSED_SECONDS = 120.0
 # at most this share of what the better one does; otherwise they are reported together.
 SEPARATED_Z = 2.0
 SEPARATED_RATIO = 0.8
+# A hypothesis's fit stops when its cost changes by less than this (relative):
+# its held-out gain is judged to 0.1 %, not to the default 1e-8.
+HYPOTHESIS_FTOL = 1e-6
 # A hypothesis explaining at least this share of the held-out residual that the
 # simulated null does not confirm leaves the verdict `unexplained`, not `consistent`.
 UNCONFIRMED_GAIN = 0.5
@@ -369,6 +372,7 @@ class Diagnosis:
         self.priors: dict[str, Prior] = {}
         self.calibrated_names: list[str] = []
         self._added_names: list[str] = []  # parameters of accepted findings
+        self._fitted_before: dict[str, dict] = {}  # each hypothesis's own parameters where its last fit ended
         self.not_testable: list[dict] = []
         self.current_alignment: dict | None = None  # set by calibrate (current_alignment.py)
         self.orders_not_found: list[dict] = []  # effects at angle orders whose order search found none
@@ -399,20 +403,22 @@ class Diagnosis:
             total += np.where(np.isfinite(r), r * r, 1e6)
         return total
 
-    def fit(self, p: dict, names: list[str], channels: list[Channel], starts: tuple[dict, ...] = ({},)) -> Fit:
+    def fit(self, p: dict, names: list[str], channels: list[Channel], starts: tuple[dict, ...] = ({},),
+            ftol: float = 1e-8) -> Fit:
         """MAP fit over `names` on the training sample (the priors of those in
         self.priors, the physical range for all): a few iterations from each
-        start, then the best of them to convergence."""
+        start, then the best of them to convergence (relative change of the cost below `ftol`)."""
         full = 60 * (len(names) + 1)
         if len(starts) == 1:
-            return self._least_squares(dict(p, **starts[0]), names, channels, full)
+            return self._least_squares(dict(p, **starts[0]), names, channels, full, ftol)
         tries = [self._least_squares(dict(p, **start), names, channels, 5) for start in starts]
         best = min(tries, key=lambda f: f.cost)
         if not np.isfinite(best.cost):
             return best
-        return self._least_squares(best.params, names, channels, full)
+        return self._least_squares(best.params, names, channels, full, ftol)
 
-    def _least_squares(self, x0_params: dict, names: list[str], channels: list[Channel], max_nfev: int) -> Fit:
+    def _least_squares(self, x0_params: dict, names: list[str], channels: list[Channel], max_nfev: int,
+                       ftol: float = 1e-8) -> Fit:
         table = parameters.table()
         x0 = np.array([x0_params[n] for n in names], float)
         lo = np.array([table[n].min for n in names])
@@ -434,7 +440,7 @@ class Diagnosis:
         try:
             # max_nfev counts steps (scipy does not count the finite-difference Jacobian's calls).
             sol = least_squares(residuals, x0 / scale, bounds=(lo / scale, hi / scale), method="trf",
-                                x_scale="jac", max_nfev=max_nfev, diff_step=1e-6)
+                                x_scale="jac", max_nfev=max_nfev, diff_step=1e-6, ftol=ftol)
         except ValueError:
             return Fit(dict(x0_params), list(names), float("inf"))
         fitted = dict(x0_params)
@@ -561,7 +567,7 @@ class Diagnosis:
             return None
         anchors = self._anchors(effect.part, effect.stateful)
         names_all = names + [a for a in anchors if a not in names]
-        fit = self.fit(trial, names_all, channels, effect.starts or ({},))
+        fit = self.fit(trial, names_all, channels, self._starts(effect, names), HYPOTHESIS_FTOL)
         per_before = [self._squared(p, [c]) for c in channels]
         per_after = [self._squared(fit.params, [c]) for c in channels]
         before, after = sum(per_before), sum(per_after)
@@ -588,6 +594,18 @@ class Diagnosis:
         torque = self.reference_torque(p)[self.used]
         return float(np.nanpercentile(torque, 95) - np.nanpercentile(torque, 5)) / p["Kf"]
 
+    def _starts(self, effect: Effect, names: list[str]) -> tuple[dict, ...]:
+        """Where a hypothesis's fit starts: its grid of starts in the first round;
+        in a later round, where its fit ended in the round before (the accepted
+        effect moves its optimum a little, not to another basin), which spares
+        the grid's probes and most of the refinement. The stateful hypotheses'
+        fits run the whole recording per evaluation: this halved their cost."""
+        before = self._fitted_before.get(effect.id)
+        # (Not for terms at angle orders: the order search may pick other orders.)
+        if before is not None and not effect.order_angles and set(before) == set(names):
+            return (before,)
+        return effect.starts or ({},)
+
     def _try_all(self, candidates: list[Effect], p: dict) -> list[Hypothesis]:
         """Every candidate's hypothesis, fitted side by side (forked.py): the
         same results as one after the other."""
@@ -596,10 +614,15 @@ class Diagnosis:
             h = self._try(candidates[i], p)
             # An Effect holds functions: not pickled. What _try noted comes back with it.
             return None if h is None else replace(h, effect=None), self.orders_not_found[said:]
+        # The null's noise of each channel set, made once here for every hypothesis (and forked child).
+        self._noise.prepare([[self.channels.index(c) for c in self.channels_of(e.part)] for e in candidates])
         found = map_forked(piece, len(candidates), self.workers)
         for _, notes in found:  # a forked child's notes reach this process only here
             self.orders_not_found += [n for n in notes if n not in self.orders_not_found]
-        return [replace(h, effect=e) for (h, _), e in zip(found, candidates) if h is not None]
+        tried = [replace(h, effect=e) for (h, _), e in zip(found, candidates) if h is not None]
+        for h in tried:
+            self._fitted_before[h.effect.id] = {n: h.params_after[n] for n in h.fitted}
+        return tried
 
     def _null_noise(self, p) -> NullNoise:
         return NullNoise(np.stack([np.where(self.used, np.nan_to_num(self.eval.residual(c, p) / self.sigma[c.name]),

@@ -179,10 +179,12 @@ EFFECTS: dict[str, Effect] = {e.id: e for e in [
            "gravity (or payload) torque on the link", "mgl*sin(theta_l)", _nonzero("mgl"),
            starts=({"mgl": 1.0}, {"mgl": -1.0}), needs="link_travel",
            revealed_by="slow link motion over a wide angle", resizes=("mgl",)),
-    Effect("link_friction", "link", ("Fl",),
-           "friction on the link side (output bearing, seals)", "Fl*tanh(omega_l*N/omega_fc)", _nonzero("Fl"),
-           starts=({"Fl": 0.05}, {"Fl": 0.3}), needs="link_reversals",
-           revealed_by="link reversals at low motor current", resizes=("Fl",)),
+    # Its smoothing omega_fl is fitted with it: a link friction that switches at
+    # the wrong speed leaves structure at low link speed on the next recording.
+    Effect("link_friction", "link", ("Fl", "omega_fl"),
+           "friction on the link side (output bearing, seals)", "Fl*tanh(omega_l/omega_fl)", _nonzero("Fl"),
+           starts=({"Fl": 0.05, "omega_fl": 0.01}, {"Fl": 0.3, "omega_fl": 0.01}, {"Fl": 0.3, "omega_fl": 0.003}),
+           needs="link_reversals", revealed_by="link reversals at low motor current", resizes=("Fl", "omega_fl")),
 ]}
 
 # Parameters calibrated whenever their part of the model is fitted: the

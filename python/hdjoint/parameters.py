@@ -77,10 +77,20 @@ def defaults(scope: str = "all") -> dict[str, float]:
     return {name: info.default for name, info in table().items() if pick(info)}
 
 
+@lru_cache(maxsize=1)
+def _estimator_names() -> frozenset[str]:
+    return frozenset(name for name, info in table().items() if info.in_estimator())
+
+
 def for_estimator(params: dict[str, float]) -> dict[str, float]:
-    """The subset of a parameter set the estimator takes."""
-    info = table()
-    return {k: v for k, v in params.items() if info[k].in_estimator()}
+    """The subset of a parameter set the estimator takes (a KeyError names an unknown parameter)."""
+    names = _estimator_names()
+    out = {k: v for k, v in params.items() if k in names}
+    if len(out) < len(params):
+        info = table()
+        for k in params:
+            info[k]  # noqa: B018 (an unknown name raises, as it always did)
+    return out
 
 
 def for_plant(params: dict[str, float]) -> dict[str, float]:

@@ -43,11 +43,22 @@ class NullNoise:
         if self.n % 2 == 0:
             phases[:, -1] = 0.0  # and so does the Nyquist bin
         self.rotation = np.exp(1j * phases)
+        self._made: dict[tuple, np.ndarray] = {}
 
     def replicates(self, rows: list[int]) -> np.ndarray:
-        """(replicate, channel, sample) noise for the channels `rows`."""
-        spectra = self.spectra[rows]
-        return np.fft.irfft(spectra[None, :, :] * self.rotation[:, None, :], n=self.n, axis=2)
+        """(replicate, channel, sample) noise for the channels `rows` (the same
+        array for the same rows: every hypothesis of a part reads one)."""
+        key = tuple(rows)
+        if key not in self._made:
+            spectra = self.spectra[list(rows)]
+            self._made[key] = np.fft.irfft(spectra[None, :, :] * self.rotation[:, None, :], n=self.n, axis=2)
+        return self._made[key]
+
+    def prepare(self, row_sets: list[list[int]]) -> None:
+        """Make the replicates of each set of rows now (before forking: the children share them)."""
+        for rows in row_sets:
+            if rows:
+                self.replicates(rows)
 
 
 def null_z(noise: np.ndarray, jacobian: np.ndarray, fit_rows: np.ndarray, fold, test) -> np.ndarray:

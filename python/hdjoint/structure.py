@@ -35,14 +35,21 @@ def held_out_gain_sq(before, after, fold, test) -> HeldOutGain:
     z is taken over the folds' *relative* gains: an effect that grows with
     the motion (most do) improves loud folds more than quiet ones in
     absolute terms, but by a similar fraction."""
-    labels = np.unique(fold[test])
-    b = np.array([np.nanmean(before[test & (fold == f)]) for f in labels])
-    a = np.array([np.nanmean(after[test & (fold == f)]) for f in labels])
+    labels, which = np.unique(fold[test], return_inverse=True)
+    b = _fold_means(before[test], which, len(labels))
+    a = _fold_means(after[test], which, len(labels))
     relative = (b - a) / np.maximum(b, 1e-300)
     gain = 1.0 - np.nanmean(after[test]) / np.nanmean(before[test])
     spread = np.std(relative, ddof=1) / np.sqrt(len(relative)) if len(relative) > 1 else np.inf
     z = float(np.mean(relative) / spread) if spread > 0 else (np.inf if np.mean(relative) > 0 else 0.0)
     return HeldOutGain(float(gain), z, relative)
+
+
+def _fold_means(x, which, count):
+    """The mean of the finite values of `x` in each fold (`which`: each value's fold index)."""
+    ok = np.isfinite(x)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.bincount(which[ok], x[ok], count) / np.bincount(which[ok], minlength=count)
 
 
 def bins_of(feature, residual, bins: int = 20, circular_period: float | None = None):
@@ -126,6 +133,14 @@ def _harmonic_coefficients(basis, residual, rows):
     return np.linalg.solve(fit @ fit.T, fit @ residual[rows])
 
 
+def _floor_coefficients(angle, order, through, residual, rows):
+    """_harmonic_coefficients at an off-order, on `rows`: without a filter the
+    basis is needed there only (the same numbers, a fraction of the cost)."""
+    if through is not None:
+        return _harmonic_coefficients(_basis(angle, order, through), residual, rows)
+    return _harmonic_coefficients(_basis(angle[rows], order, None), residual[rows], slice(None))
+
+
 def order_search(angle, residual, fold, train, test, orders, exclude=(), name="theta_m",
                  max_orders: int = 2, through=None, seen: list | None = None) -> list[Order]:
     """Angle-synchronous analysis: least-squares power of the residual at each
@@ -146,7 +161,7 @@ def order_search(angle, residual, fold, train, test, orders, exclude=(), name="t
         basis = _basis(angle, k, through)
         coef = _harmonic_coefficients(basis, res, train)
         pred, amp = coef[:2] @ basis[:2], float(np.hypot(coef[0], coef[1]))
-        floor = np.median([np.hypot(*_harmonic_coefficients(_basis(angle, k + d, through), res, floor_rows)[:2])
+        floor = np.median([np.hypot(*_floor_coefficients(angle, k + d, through, res, floor_rows)[:2])
                            for d in (-0.27, 0.23, 0.31)])
         found.append(Order(name, float(k), amp, held_out_gain(res, pred, fold, test), amp / max(floor, 1e-300)))
     if seen is not None:

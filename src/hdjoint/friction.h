@@ -71,14 +71,14 @@ inline double motor_torque(double i_m, double theta_m, const Parameters& p) {
     return t;
 }
 
-// Link-side Coulomb friction, smoothed over the link speed omega_fc/N that
-// matches the motor's smoothing: Fl*tanh(N*omega_l/omega_fc).
+// Link-side Coulomb friction, smoothed over its own link speed omega_fl
+// (the link's bearings and seals, not the motor's): Fl*tanh(omega_l/omega_fl).
 inline double link_friction(double omega_l, const Parameters& p) {
-    return p.Fl * std::tanh(p.N * omega_l / p.omega_fc);
+    return p.Fl * std::tanh(omega_l / p.omega_fl);
 }
 inline double link_friction_slope(double omega_l, const Parameters& p) {
-    const double c = std::cosh(p.N * omega_l / p.omega_fc);
-    return p.Fl * p.N / (p.omega_fc * c * c);
+    const double c = std::cosh(omega_l / p.omega_fl);
+    return p.Fl / (p.omega_fl * c * c);
 }
 
 }  // namespace hdjoint

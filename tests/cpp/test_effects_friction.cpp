@@ -199,7 +199,7 @@ TEST(EffectsFriction, EstimatorInputCarriesCogging) {
 // ---- link friction ------------------------------------------------------------------
 
 // Link friction holds the link against an external torque inside +-Fl (it
-// creeps at most at omega_fc/N, the smoothing) and lets it go outside.
+// creeps at most at omega_fl, the smoothing) and lets it go outside.
 TEST(EffectsFriction, LinkFrictionHoldsInsideItsBand) {
     Parameters p;
     p.motor_counts = p.link_counts = 0.0;
@@ -215,7 +215,7 @@ TEST(EffectsFriction, LinkFrictionHoldsInsideItsBand) {
         for (int k = 0; k < 500; ++k) EXPECT_TRUE(j.advance(1e-3, {0.0, tau_ext}));
         return j.state()(2) - start;
     };
-    const double creep = p.omega_fc / p.N * std::atanh(0.5) * 0.5;  // at tau_ext = Fl/2 for 0.5 s
+    const double creep = p.omega_fl * std::atanh(0.5) * 0.5;  // at tau_ext = Fl/2 for 0.5 s
     EXPECT_LT(std::fabs(travel(0.5 * p.Fl)), 1.05 * creep);
     EXPECT_LT(std::fabs(travel(-0.5 * p.Fl)), 1.05 * creep);
     EXPECT_LT(travel(2.0 * p.Fl), -0.5);  // (2Fl - Fl)/Jl * 0.5^2/2 = 1.7 rad

@@ -58,3 +58,18 @@ def test_every_effect_of_the_library_has_its_parameters_in_the_model():
     for slot in KINEMATIC_EXTRA:
         assert {f"{slot}_order", f"{slot}_a", f"{slot}_b"} <= set(table)
     assert {"cog_order", "cog_a", "cog_b"} <= set(table)
+
+
+def test_the_transmission_estimate_does_not_lag_by_the_current_delay(diag):
+    """i_delay is the current's delay behind the encoders: tau_T is compared with
+    a torque sensor sampled with the encoders, so it must not lag by it (the
+    estimator's delay line did: a 2 ms delay put its lag into the transmission
+    channel, and Kf, Cf and eq. (7) absorbed it). With the wave generator
+    loaded by tau/N the current does not enter tau_T at all."""
+    from hdjoint.channels import tau_transmission
+    p = dict(diag.nominal, wg_load=1.0)
+    np.testing.assert_array_equal(tau_transmission(diag.prep, dict(p, i_delay=2e-3)), tau_transmission(diag.prep, p))
+    # With the motor current loading it, the current is the one realigned with the encoders.
+    p = dict(diag.nominal, wg_load=0.0)
+    late = tau_transmission(diag.prep, dict(p, i_delay=2e-3))
+    assert np.nanmax(np.abs(late - tau_transmission(diag.prep, p))) > 0

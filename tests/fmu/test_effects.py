@@ -27,7 +27,7 @@ NEW = {
     "i_delay": ("estimator", 0.0), "wg_load": ("estimator", 0.0), "Fl": ("plant", 0.0),
     "lugre_sigma0": ("plant", 0.0), "lugre_sigma1": ("plant", 0.0),
     "bw_A": ("plant", 0.0), "bw_beta": ("plant", 0.0), "bw_gamma": ("plant", 0.0),
-    "thermal_gain": ("plant", 0.0), "thermal_tc": ("plant", 20.0),
+    "thermal_gain": ("plant", 0.0), "thermal_tc": ("plant", 20.0), "omega_fl": ("plant", 0.01),
 }
 
 # Every effect on, at sizes a real joint could have.
@@ -72,7 +72,7 @@ def test_every_new_parameter_is_in_the_table_switched_off():
         assert table[name].default == default, name
         assert table[name].min <= default <= table[name].max, name
     # Value references of the paper's parameters did not move: the new ones come after.
-    # (The joint-state filter's settings, jsf_*, and std_nis_time came later still.)
+    # (The joint-state filter's settings, jsf_*, std_nis_time and omega_fl came later still.)
     paper = [n for n in table if n not in NEW and not n.startswith("jsf_") and n != "std_nis_time"]
     assert max(table[n].value_reference for n in paper) < min(table[n].value_reference for n in NEW)
 
