@@ -3,7 +3,7 @@
     and per joint-state filter step alone, timed inside C++; the smoother's cost per sample,
   - us per step through JointTorqueEstimator.fmu driven by fmpy,
   - seconds for `hdjoint estimate` on the 58 s paper recording (FMU and batch),
-  - seconds for the batch path over the same recording.
+  - seconds for the batch path over the same recording, and for reading its CSV (with every check).
 Run: python benchmarks/bench_estimator.py
 """
 from __future__ import annotations
@@ -19,7 +19,7 @@ import numpy as np
 
 from hdjoint import _core, experiments, parameters
 from hdjoint.fmu_runner import run_estimator_fmu
-from hdjoint.recording import write_recording
+from hdjoint.recording import read_recording, write_recording
 from results import ResultsPage
 
 
@@ -67,6 +67,8 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "paper.csv"
         write_recording(path, rec)
+        read_s = best_of(lambda: read_recording(path), 3)
+        print(f"reading the 58 s recording's CSV:       {read_s:8.3f} s  ({steps / read_s:,.0f} rows/s, checked)")
         for engine in ("fmu", "batch"):
             cmd = [sys.executable, "-m", "hdjoint.cli", "estimate", str(path), "--engine", engine,
                    "-o", str(Path(tmp) / "est.csv")]
