@@ -699,7 +699,7 @@ class Diagnosis:
                             gain=replace(h.gain, gain=h.gain.gain * (1.0 - steady.steady_share)), orders=[])
         alternatives = [a for a in finding.alternatives if a.effect.id != "coulomb_friction"] + [lookalike]
         share = h.gain.gain / (h.gain.gain + sum(max(a.gain.gain, 0.0) for a in alternatives))
-        confidence = float(norm.cdf(h.gain.z - 2.0)) * (1.0 - h.p_value) * share
+        confidence = _confidence(h) * share
         return replace(finding, kind="ambiguous", alternatives=alternatives, confidence=round(confidence, 3))
 
     def unconfirmed_structure(self) -> list[dict]:
@@ -763,6 +763,12 @@ def _separated(best: Hypothesis, rival: Hypothesis) -> bool:
     return bool(clearly and rival.gain.gain <= SEPARATED_RATIO * best.gain.gain)
 
 
+def _confidence(h: Hypothesis) -> float:
+    """A finding's confidence before sharing it with look-alikes: how far its
+    held-out z clears 2, times one less its multiplicity-corrected p-value."""
+    return float(norm.cdf(h.gain.z - 2.0)) * (1.0 - h.p_value)
+
+
 def _finding_for(best: Hypothesis, others: list[Hypothesis]) -> Finding:
     """An added finding, or an ambiguous one when a look-alike explains the same
     structure and is significant on its own."""
@@ -770,7 +776,7 @@ def _finding_for(best: Hypothesis, others: list[Hypothesis]) -> Finding:
                                                       or best.effect.id in o.effect.lookalikes)
               and not _separated(best, o)]
     runner_up = others[0] if others else None
-    confidence = float(norm.cdf(best.gain.z - 2.0)) * (1.0 - best.p_value)
+    confidence = _confidence(best)
     if not rivals:
         return Finding(best.effect, "added", best.params_before, best.params_after, best.fitted, best.p_value,
                        round(confidence, 3), best, runner_up=runner_up)
