@@ -41,3 +41,14 @@ def test_results_done_twice_count_once(tmp_path):
     again = row("control", [], run("unexplained"))
     path.write_text(json.dumps(first) + "\n" + json.dumps(again) + "\n")
     assert bench.load_results(path) == [first]
+
+
+def test_a_miss_the_diagnosis_said_it_cannot_tell_is_counted_apart(tmp_path):
+    said = dict(run("consistent", excitation="sweep"), cannot_tell=["viscous_friction", "time_delay"])
+    silent = dict(run("consistent"), cannot_tell=["time_delay"])
+    rows = [row("viscous", ["viscous_friction"], said, seed=2), row("backlash", ["backlash"], silent),
+            row("cogging", ["cogging"], run("missing_physics", {"effect": "cogging"}))]
+    text = bench.write_table(rows, tmp_path / "table.md")
+    assert "| single effect named first (added, resized or in a look-alike set) | 1/3 (33 %)" in text
+    assert "said it cannot tell (`cannot_tell`) | 1/2 (50 %)" in text
+    assert "s2 sweep: consistent, cannot tell viscous_friction |" in text
