@@ -35,7 +35,7 @@ from scipy.stats import norm
 from threadpoolctl import threadpool_limits
 
 from . import parameters
-from .calibration import RESIZE_Z, Calibrated, Prior, posterior_std, priors, robust_std
+from .calibration import RESIZE_Z, Calibrated, Prior, posterior_std, priors, robust_std, widened
 from .channels import ESTIMATES, SMOOTHED_PARTS, Prepared, depends_on
 from .current_alignment import align_current
 from .forked import map_forked
@@ -256,7 +256,8 @@ class Fit:
     params: dict
     names: list[str]
     cost: float
-    std: dict = field(default_factory=dict)  # posterior std of each fitted parameter: the wider of the two below
+    # Posterior std of each fitted parameter: the wider of the two below, times its model-form factor (calibration.py).
+    std: dict = field(default_factory=dict)
     std_laplace: dict = field(default_factory=dict)
     std_robust: dict = field(default_factory=dict)
 
@@ -448,7 +449,8 @@ class Diagnosis:
         laplace = posterior_std(sol.jac, scale)
         blocks = np.tile(self.fit_index * SCORE_BLOCKS // len(self.rec), len(channels))
         robust = robust_std(sol.jac, sol.fun, blocks, scale)
-        return Fit(fitted, list(names), float(sol.cost), dict(zip(names, np.maximum(laplace, robust))),
+        wider = {n: widened(n, s) for n, s in zip(names, np.maximum(laplace, robust))}
+        return Fit(fitted, list(names), float(sol.cost), wider,
                    dict(zip(names, laplace)), dict(zip(names, robust)))
 
     # ---- the steps -------------------------------------------------------------
