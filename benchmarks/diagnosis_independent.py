@@ -148,6 +148,7 @@ def write_table(rows: list[dict], path: Path = TABLE) -> str:
     closed_named = [r for r in closure_rows if named_all(r) and closed(r)]
     missed = [r for r in single if not first_named(r) and "cannot_tell" in r["runs"][0]]
     alarms = sum(run["verdict"] != "consistent" for run in controls)
+    told = [run for run in controls if "cannot_tell" in run]  # runs from before 2026-11-23 did not keep it
     times = [run["seconds"] for r in rows for run in r["runs"] if run.get("seconds") is not None]
     sims = [run["simulate_seconds"] for r in rows for run in r["runs"]]
     seeds = sorted({r["seed"] for r in rows})
@@ -172,6 +173,8 @@ def write_table(rows: list[dict], path: Path = TABLE) -> str:
         f"{_pct(len(closed_named), len(closure_rows))} | >= {100 * GOALS['closure']:.0f} % |",
         f"| missed single effects the diagnosis said it cannot tell (`cannot_tell`) | "
         f"{_pct(sum(r['present'][0] in r['runs'][0].get('cannot_tell', []) for r in missed), len(missed))} | - |",
+        f"| controls where `cannot_tell` names an effect (a `consistent` verdict's caveat) | "
+        f"{_pct(sum(bool(run['cannot_tell']) for run in told), len(told))} | - |",
         f"| diagnosis wall time per recording, under the load of parallel runs (mean / max) | "
         f"{(sum(times) / len(times)) if times else 0:.1f} / {max(times, default=0):.1f} s | <= 20 s CPU per 58 s (measured alone: diagnosis_speed.md) |",
         f"| truth simulation per recording (mean / max) | "

@@ -52,3 +52,11 @@ def test_a_miss_the_diagnosis_said_it_cannot_tell_is_counted_apart(tmp_path):
     assert "| single effect named first (added, resized or in a look-alike set) | 1/3 (33 %)" in text
     assert "said it cannot tell (`cannot_tell`) | 1/2 (50 %)" in text
     assert "s2 sweep: consistent, cannot tell viscous_friction |" in text
+
+
+def test_how_often_a_control_carries_a_cannot_tell_caveat(tmp_path):
+    rows = [row("control on paper", [], dict(run("consistent"), cannot_tell=["hysteresis"]),
+                dict(run("consistent"), cannot_tell=[])),
+            row("control on sweep", [], run("consistent"))]  # an older row: not counted
+    text = bench.write_table(rows, tmp_path / "table.md")
+    assert "| controls where `cannot_tell` names an effect (a `consistent` verdict's caveat) | 1/2 (50 %)" in text
