@@ -92,7 +92,8 @@ def fit_factors(rows: list[dict]) -> dict[str, float]:
     contain the truth in 95 % of `rows` (at least 1)."""
     by_name = defaultdict(list)
     for r in rows:
-        by_name[r["name"]].append(abs(r["error"]) / max(r["raw"], 1e-300))
+        if r["raw"] > 0:  # a zero std: the fit sat at a bound of the parameter's range, no posterior to widen
+            by_name[r["name"]].append(abs(r["error"]) / r["raw"])
     return {n: round(max(1.0, float(np.quantile(z, 0.95)) / Z95), 3) for n, z in by_name.items()}
 
 
