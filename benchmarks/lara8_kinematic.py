@@ -172,7 +172,7 @@ def write_table(rows: list[dict], closures: list[dict], path: Path = TABLE) -> s
          "what the recording can say"],
         [[r["recording"], ", ".join(f"{o['order']:g}" for o in r["orders"] if o["named"]) or "none",
           f"{r['kinematic_rms']:.1e}", f"{K1 * r['kinematic_rms']:.2f}", f"{r['torque_rms']:.1f}",
-          _can_say(r)] for r in rows])
+          can_say(r)] for r in rows])
     lines += ["", "## Closure: the torsion residual on another recording of the joint (RMS, rad)", "",
               "The orders named on the first recording (eq. (7)'s 2 and 4 where none is) fitted there with its "
               "nuisances; on the other, its own nuisances refitted (encoder zero, load, link drift) and the "
@@ -192,7 +192,7 @@ def write_table(rows: list[dict], closures: list[dict], path: Path = TABLE) -> s
     return text
 
 
-def _can_say(r: dict) -> str:
+def can_say(r: dict) -> str:
     cannot = {o["cannot"] for o in r["orders"] if o["cannot"]}
     if r["revolutions"] < MIN_REVOLUTIONS:
         return "cannot tell: " + next(iter(cannot))
