@@ -185,9 +185,34 @@ def run_joint(joint: str, files: list[str], data: Path, tmp: Path) -> list[dict]
         if other is not None:
             row["validation"] = [validate(other, nominal_for(n), calibrated_set(nominal_for(n), calibration), doc["params"],
                                           fitted_on=Prepared(fitted, kinematics(fitted), fitted.time - fitted.time[0]))]
+        # The torsion needs no diagnosis of the half: joint2's first half (2.0 s) is judged on its second too.
+        row["torsion"] = torsion_alone(name, rec, *((rec, recs[1 - k]) if len(recs) > 1 else halves(rec)), n)
         rows.append(row)
         print(f"{name}: {row['verdict']} {[f['effect'] for f in row['findings']]}", flush=True)
     return rows
+
+
+def torsion_alone(name: str, rec, fitted, other, n: int) -> dict:
+    """The kinematic error measured on the encoders alone (lara8_kinematic.py):
+    the orders named on the recording, and the torsion residual on the other
+    recording (or half) with those orders fitted on `fitted` (eq. (7)'s 2 and 4 when none is named)."""
+    import lara8_kinematic
+    found = lara8_kinematic.analyse(name, rec)
+    named = [o for o in found["orders"] if o["named"]]
+    return {"named": [{k: o[k] for k in ("order", "amplitude", "half_width", "gain", "z", "p")} for o in named],
+            "says": lara8_kinematic.can_say(found),
+            "closure": lara8_kinematic.closure(fitted, other, n, [o["order"] for o in named] or [2.0, 4.0])}
+
+
+def _torsion_cells(r: dict) -> list[str]:
+    t = r["torsion"]
+    named = "; ".join(f"order {o['order']:g}: {o['amplitude']:.1e} ± {o['half_width']:.1e} rad (held-out gain "
+                      f"{100 * o['gain']:.0f} %, p = {o['p']:.1g})" for o in t["named"]) or t["says"]
+    c = t["closure"]
+    if c["cannot"]:
+        return [named, f"cannot tell: {c['cannot']}"]
+    return [named, f"{c['none']:.2e} -> {c['fitted']:.2e} (eq. (7) nominal: {c['eq7_nominal']:.2e}; orders "
+                   f"{', '.join(f'{k:g}' for k in c['orders'])})"]
 
 
 def kinematic_error_says(doc: dict) -> str:
@@ -245,7 +270,7 @@ def _verdict_row(r: dict) -> list:
                        for q in v.get("extrapolation", []) if q.get("warning"))
     val += f" (extrapolated, samples beyond the fitted range: {beyond})" if beyond else ""
     return [r["recording"], f"{r['N']} ({r['N_encoders']})", r["verdict"], found, r["kinematic_error_says"], kin,
-            r["validated_on"], val or "-"]
+            r["validated_on"], val or "-", *_torsion_cells(r)]
 
 
 def write_table(rows: list[dict], path: Path = TABLE) -> str:
@@ -261,10 +286,15 @@ def write_table(rows: list[dict], path: Path = TABLE) -> str:
     lines += ["", "## Verdict, the kinematic error, and the torsion residual on another recording", ""]
     lines += markdown_table(["recording", "N (encoders' slope)", "verdict", "findings (kind, orders)", "kinematic error",
                              "eq. (7) coefficients: nominal -> calibrated (x nominal)", "validated on",
-                             "residual RMS on it, N.m: nominal -> calibrated -> corrected"],
+                             "residual RMS on it, N.m: nominal -> calibrated -> corrected",
+                             "kinematic error on the torsion alone (lara8_kinematic.py)",
+                             "torsion residual RMS on it, rad: no kinematic error -> orders fitted here"],
                             [_verdict_row(r) for r in rows])
     kinematic = [r for r in rows if any(f["effect"] == "kinematic_error" for f in r["findings"])]
-    lines += ["", f"Kinematic error named (added or resized): {len(kinematic)} of {len(rows)} diagnoses. "
+    on_torsion = [r for r in rows if r["torsion"]["named"]]
+    lines += ["", f"Kinematic error named (added or resized): {len(kinematic)} of {len(rows)} diagnoses; on the "
+              f"torsion alone: {len(on_torsion)} of {len(rows)} recordings "
+              f"({', '.join(r['recording'] for r in on_torsion) or 'none'}). "
               "Proposed open-library terms: " + ("; ".join(f"{r['recording']}: {t['channel']} {t['terms']} "
                                                            f"(held-out gain {t['holdout_gain']})"
                                                            for r in rows for t in r["proposed_terms"]) or "none") + "."]

@@ -489,22 +489,29 @@ class Diagnosis:
             self._update_noise(p)
         return p, fit
 
-    def order_search(self, p, part: str, channel: Channel, angles: tuple[str, ...]) -> list[Order]:
-        """Orders of `angles` the residual of `channel` carries, strongest first
-        (orders the nominal model already has at that angle excluded)."""
-        r = self.eval.residual(channel, p)
+    def order_search(self, p, part: str, channels: list[Channel], angles: tuple[str, ...]) -> list[Order]:
+        """Orders of `angles` the residuals of `channels` carry, strongest first
+        (orders the nominal model already has at that angle excluded). Every
+        channel of the part is searched: on LARA8 the kinematic error is most
+        of the link channel's residual (0.7 N.m) and 5 % of the motor
+        channel's (14 N.m of motor-side mismatch, broadband in the angle)."""
         smoothed = self.prep.kin.smooth if part in SMOOTHED_PARTS else None
         existing = eq7_orders(p) if part == "transmission" else {}
-        found = []
+        found: dict[tuple[str, float], Order] = {}
         self._orders_seen = []
-        for angle in angles:
-            values = getattr(self.rec, angle)
-            found += order_search(values, r, self.fold, self.train, self.test,
-                                  candidate_orders(angle, np.ptp(values)), existing.get(angle, ()), angle,
-                                  through=smoothed if angle == "theta_m" else None, seen=self._orders_seen)
-        return found
+        for channel in channels:
+            r = self.eval.residual(channel, p)
+            for angle in angles:
+                values, seen = getattr(self.rec, angle), []
+                for o in order_search(values, r, self.fold, self.train, self.test,
+                                      candidate_orders(angle, np.ptp(values)), existing.get(angle, ()), angle,
+                                      through=smoothed if angle == "theta_m" else None, seen=seen):
+                    if (o.angle, o.order) not in found or o.gain.gain > found[o.angle, o.order].gain.gain:
+                        found[o.angle, o.order] = replace(o, channel=channel.name)
+                self._orders_seen += [replace(o, channel=channel.name) for o in seen]
+        return sorted(found.values(), key=lambda o: -o.gain.gain)
 
-    def _no_order_found(self, effect: Effect, channel: Channel) -> None:
+    def _no_order_found(self, effect: Effect, channels: list[Channel]) -> None:
         """Say why an effect at angle orders was not tested: no order passed the
         order search (the strongest ones, with their held-out evidence)."""
         if any(n["effect"] == effect.id for n in self.orders_not_found):
@@ -512,11 +519,11 @@ class Diagnosis:
         travel = {a: round(float(np.ptp(getattr(self.rec, a))) / (2 * math.pi), 3) for a in effect.order_angles}
         strongest = sorted(self._orders_seen, key=lambda o: -o.gain.z)[:3]
         self.orders_not_found.append({
-            "effect": effect.id, "channel": channel.name, "revolutions": travel,
+            "effect": effect.id, "channel": " and ".join(c.name for c in channels), "revolutions": travel,
             "strongest": [{"angle": o.angle, "order": o.order, "amplitude": round(o.amplitude, 5),
                            "held_out_gain": round(o.gain.gain, 4), "z": round(o.gain.z, 2),
-                           "prominence": round(o.prominence, 2)} for o in strongest],
-            "reason": _why_no_order(effect, channel, strongest[0] if strongest else None)})
+                           "prominence": round(o.prominence, 2), "channel": o.channel} for o in strongest],
+            "reason": _why_no_order(effect, strongest[0] if strongest else None)})
 
     def _anchors(self, part: str, stateful: bool = False) -> list[str]:
         """The calibrated parameters of `part`, refitted with every hypothesis
@@ -562,10 +569,10 @@ class Diagnosis:
         if not channels:
             return None
         trial, names, orders = effect.candidates(
-            effect, p, lambda q, angles: self.order_search(q, effect.part, channels[0], angles))
+            effect, p, lambda q, angles: self.order_search(q, effect.part, channels, angles))
         if not names:
             if effect.order_angles:
-                self._no_order_found(effect, channels[0])
+                self._no_order_found(effect, channels)
             return None
         anchors = self._anchors(effect.part, effect.stateful)
         names_all = names + [a for a in anchors if a not in names]
@@ -592,9 +599,14 @@ class Diagnosis:
         return hypothesis
 
     def _torsion_span(self, p: dict) -> float:
-        """The torsion the reference torque spans (5-95 %), rad."""
+        """The torsion of the recording (5-95 %), rad: the smaller of what the
+        reference torque would twist the flexspline by and what the encoders
+        measured. On LARA8 the current's torque (mostly the motor's own
+        inertia and friction) would twist it 20 times more than it turns."""
         torque = self.reference_torque(p)[self.used]
-        return float(np.nanpercentile(torque, 95) - np.nanpercentile(torque, 5)) / p["Kf"]
+        from_torque = float(np.nanpercentile(torque, 95) - np.nanpercentile(torque, 5)) / p["Kf"]
+        torsion = (self.rec.theta_m / p["N"] - self.rec.theta_l)[self.used]
+        return min(from_torque, float(np.percentile(torsion, 95) - np.percentile(torsion, 5)))
 
     def _starts(self, effect: Effect, names: list[str]) -> tuple[dict, ...]:
         """Where a hypothesis's fit starts: its grid of starts in the first round;
@@ -745,7 +757,7 @@ class Diagnosis:
         return sorted(out, key=lambda f: f.p_value)
 
 
-def _why_no_order(effect: Effect, channel: Channel, strongest: Order | None) -> str:
+def _why_no_order(effect: Effect, strongest: Order | None) -> str:
     why = ("no order of " + " or ".join(effect.order_angles) + " has a significant held-out gain (z > 3, "
            "gain > 0.5 %) standing out of the spectrum (prominence > 3)")
     if strongest is None:
@@ -753,7 +765,7 @@ def _why_no_order(effect: Effect, channel: Channel, strongest: Order | None) -> 
     head = f"; the strongest, {strongest.angle} order {strongest.order:g} (z = {strongest.gain.z:.1f}),"
     if strongest.prominence <= 3.0:
         return why + (f"{head} is {strongest.prominence:.2g} times its neighbouring off-orders: broadband "
-                      f"structure in the {channel.name} residual, not a ripple")
+                      f"structure in the {strongest.channel} residual, not a ripple")
     return why + f"{head} stands out of the spectrum but predicts too little held out"
 
 

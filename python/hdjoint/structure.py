@@ -109,6 +109,7 @@ class Order:
     amplitude: float  # of the residual component, residual units
     gain: HeldOutGain
     prominence: float  # power at this order over the median power at off-orders
+    channel: str = ""  # the residual it was found in, when several were searched
 
 
 def candidate_orders(angle: str, travel: float) -> list[float]:
@@ -141,6 +142,21 @@ def _floor_coefficients(angle, order, through, residual, rows):
     return _harmonic_coefficients(_basis(angle[rows], order, None), residual[rows], slice(None))
 
 
+# Off-orders giving an order's floor: a quarter order beside it, where the
+# recording turns the angle often enough to resolve a quarter order.
+OFF_ORDERS = (-0.27, 0.23, 0.31)
+
+
+def _off_order_stretch(angle) -> float:
+    """How far the off-orders must move out so each lies beyond the order's own
+    main lobe (1.1 / revolutions): a least-squares fit at k + d of a ripple at k
+    over R revolutions picks up sinc(d R) of it. On LARA8 joint1_jog (2.6 motor
+    revolutions) the quarter-order off-orders sat inside the lobe: a pure ripple
+    there would have shown a prominence near 1, read as broadband."""
+    revolutions = max(float(np.ptp(angle)) / (2 * np.pi), 1e-9)
+    return max(1.0, 1.1 / (min(abs(d) for d in OFF_ORDERS) * revolutions))
+
+
 def order_search(angle, residual, fold, train, test, orders, exclude=(), name="theta_m",
                  max_orders: int = 2, through=None, seen: list | None = None) -> list[Order]:
     """Angle-synchronous analysis: least-squares power of the residual at each
@@ -154,6 +170,7 @@ def order_search(angle, residual, fold, train, test, orders, exclude=(), name="t
     train, test = train & ok, test & ok
     # The floor needs no held-out prediction: every 4th training sample will do.
     floor_rows = np.flatnonzero(train)[::4]
+    offsets = np.array(OFF_ORDERS) * _off_order_stretch(angle)
     found = []
     for k in orders:
         if any(abs(k - e) < 1e-9 for e in exclude):
@@ -162,7 +179,7 @@ def order_search(angle, residual, fold, train, test, orders, exclude=(), name="t
         coef = _harmonic_coefficients(basis, res, train)
         pred, amp = coef[:2] @ basis[:2], float(np.hypot(coef[0], coef[1]))
         floor = np.median([np.hypot(*_floor_coefficients(angle, k + d, through, res, floor_rows)[:2])
-                           for d in (-0.27, 0.23, 0.31)])
+                           for d in offsets])
         found.append(Order(name, float(k), amp, held_out_gain(res, pred, fold, test), amp / max(floor, 1e-300)))
     if seen is not None:
         seen.extend(found)
