@@ -185,7 +185,7 @@ EFFECTS: dict[str, Effect] = {e.id: e for e in [
            _nonzero("Kt_warmup", "Fc_drift"),
            starts=({"Kt_warmup": -0.02, "Kt_warmup_tc": 5.0, "Fc_drift": -2e-3},
                    {"Kt_warmup": -0.02, "Kt_warmup_tc": 20.0, "Fc_drift": 2e-3},
-                   {"Kt_warmup": 0.02, "Kt_warmup_tc": 10.0, "Fc_drift": -1e-3}),
+                   {"Kt_warmup": -0.05, "Kt_warmup_tc": 10.0, "Fc_drift": -1e-3}),
            needs="duration", lives_in_time=True,
            revealed_by="the same motion repeated from a cold start for several minutes (at high current for the "
                        "torque constant, at high speed for the friction)",

@@ -276,7 +276,7 @@ def test_joint_fmu_equals_the_batch_path_with_effects_on():
     ("HarmonicDriveJoint", "Fl", -1.0), ("HarmonicDriveJoint", "lugre_sigma0", -5.0),
     ("HarmonicDriveJoint", "bw_beta", 2e6), ("HarmonicDriveJoint", "thermal_gain", -0.95),
     ("HarmonicDriveJoint", "Fs", float("nan")), ("JointTorqueEstimator", "Kt_warmup", -0.8),
-    ("HarmonicDriveJoint", "Kt_warmup_tc", 0.0),
+    ("HarmonicDriveJoint", "Kt_warmup_tc", 0.0), ("HarmonicDriveJoint", "Kt_warmup", 0.01),
 ])
 def test_fmu_refuses_new_parameters_out_of_range(fmu, name, value):
     with FmuInstance(fmu_path(fmu), "bad") as inst:
