@@ -384,6 +384,16 @@ OutArray motor_friction_law(const std::map<std::string, double>& values, Array o
     return make_array(std::move(f));
 }
 
+// The torque constant's warm-up scale Kt(t)/Kt at each time since the start of the run.
+OutArray torque_constant_scale_law(const std::map<std::string, double>& values, Array t) {
+    const std::size_t n = t.shape(0);
+    check_lengths(n, {});
+    const Parameters p = parameters_from(values, true, true);
+    std::vector<double> s(n);
+    for (std::size_t j = 0; j < n; ++j) s[j] = torque_constant_scale(t(j), p);
+    return make_array(std::move(s));
+}
+
 // Cogging torque on the motor (0 when off).
 OutArray cogging_law(const std::map<std::string, double>& values, Array theta_m) {
     const std::size_t n = theta_m.shape(0);
@@ -479,6 +489,9 @@ NB_MODULE(_core, m) {
     m.def("motor_friction", &motor_friction_law, nb::arg("params"), nb::arg("omega_m"), nb::arg("t"),
           "Motor friction of eq. (2) (Coulomb, Stribeck, viscous; the drift scale max(0, 1 + Fc_drift*t)) at each "
           "speed and time since the start: the FMUs' code.");
+    m.def("torque_constant_scale", &torque_constant_scale_law, nb::arg("params"), nb::arg("t"),
+          "The torque constant's warm-up scale 1 + Kt_warmup*(1 - exp(-t/Kt_warmup_tc)) at each time since the "
+          "start: the FMUs' code.");
     m.def("cogging_torque", &cogging_law, nb::arg("params"), nb::arg("theta_m"),
           "Cogging torque on the motor at each motor angle (0 when off).");
     m.def("link_torque", &link_torque_law, nb::arg("params"), nb::arg("theta_l"), nb::arg("omega_l"),

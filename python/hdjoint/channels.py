@@ -179,6 +179,16 @@ def smoothed_friction(prep: Prepared, p: dict) -> np.ndarray:
     return prep._friction[1]
 
 
+def torque_constant_scale(prep: Prepared, p: dict, index: np.ndarray | None = None) -> np.ndarray | float:
+    """Kt(t)/Kt, the torque constant's warm-up (friction.h; 1 when off), at
+    `index` only if given. It changes over seconds, so it multiplies the
+    smoothed current unfiltered."""
+    if not _get(p, "Kt_warmup"):
+        return 1.0
+    t = prep.t_rel if index is None else prep.t_rel[index]
+    return _core.torque_constant_scale(_native(p), np.ascontiguousarray(t, float))
+
+
 def delayed_current(prep: Prepared, delay: float) -> np.ndarray:
     """The current realigned with the encoders when its measurement lags by `delay` seconds."""
     rec = prep.rec
@@ -207,7 +217,7 @@ def tau_motor(prep: Prepared, p: dict[str, float], index: np.ndarray | None = No
     # The delay and the ripple pass through the smoothing filter, which needs
     # the whole run; everything else is pointwise.
     i = pick(_smoothed_current(prep, _get(p, "i_delay")))
-    drive = p["Kt"] * i - p["Jm"] * pick(kin.alpha_m) - pick(smoothed_friction(prep, p))
+    drive = p["Kt"] * torque_constant_scale(prep, p, index) * i - p["Jm"] * pick(kin.alpha_m) - pick(smoothed_friction(prep, p))
     if _get(p, "cog_a") or _get(p, "cog_b"):  # ripple at the motor angle's orders: through the same filter as the current
         drive = drive + pick(kin.smooth(_core.cogging_torque(_native(p), np.ascontiguousarray(rec.theta_m, float))))
     return p["N"] * drive
@@ -226,7 +236,8 @@ ESTIMATES = {"transmission": tau_transmission, "motor": tau_motor, "link": tau_l
 
 # What each estimate reads, for caching: keep in step with the functions
 # above (tests/test_diagnosis_internals.py fails when a parameter is missing).
-_MOTOR_PARAMETERS = ("N", "Kt", "Jm") + _FRICTION_PARAMETERS + ("cog_order", "cog_a", "cog_b", "i_delay")
+_MOTOR_PARAMETERS = ("N", "Kt", "Jm", "Kt_warmup", "Kt_warmup_tc") + _FRICTION_PARAMETERS + (
+    "cog_order", "cog_a", "cog_b", "i_delay")
 _LINK_PARAMETERS = ("Jl", "Bl", "mgl", "Fl", "omega_fl")
 
 

@@ -203,6 +203,7 @@ def finding_document(result, f) -> dict:
         "physics_left_out": f.effect.physics,
         "held_out_gain": round(h.gain.gain, 5),
         "z": round(h.gain.z, 2),
+        **h.drift_evidence(),
         "p_value_raw": h.p_raw,
         "folds_improved": f"{int(np.sum(h.gain.fold_gains > 0))}/{len(h.gain.fold_gains)}",
         "delta_bic": round(h.delta_bic, 1),

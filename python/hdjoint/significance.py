@@ -1,7 +1,8 @@
 """p-values of the diagnosis's hypothesis tests, calibrated by simulation,
 and the Benjamini-Hochberg correction across hypotheses and locations.
 
-The statistic is the held-out gain's z over folds (structure.held_out_gain_sq).
+The statistic is the held-out gain's z over folds (structure.held_out_gain_sq);
+for an effect that lives in time (a drift), the pooled held-out gain.
 Its distribution when the hypothesis is false is not the normal one: the
 residual is coloured (smoothing filters, model-form differences), and a fit
 on the training folds always finds something. So the null distribution is
@@ -61,16 +62,18 @@ class NullNoise:
                 self.replicates(rows)
 
 
-def null_z(noise: np.ndarray, jacobian: np.ndarray, fit_rows: np.ndarray, fold, test) -> np.ndarray:
-    """The held-out z of a linear hypothesis fitted to each noise replicate
-    (structure.held_out_gain_sq's statistic, for all replicates at once).
+def _null_fold_errors(noise: np.ndarray, jacobian: np.ndarray, fit_rows: np.ndarray, fold, test):
+    """A linear hypothesis fitted to each noise replicate on the training rows:
+    each replicate's held-out mean squared residual per fold, before and after
+    ((replicate, fold) each), and the held-out samples per fold; None when the
+    hypothesis moves nothing.
 
     noise: (replicate, channel, sample); jacobian: (channel, sample, parameter)."""
     channels, _, k = jacobian.shape
     j_fit = jacobian[:, fit_rows, :].reshape(-1, k)
     keep = np.linalg.norm(j_fit, axis=0) > 0
     if not keep.any():
-        return np.zeros(len(noise))
+        return None
     j_fit = j_fit[:, keep]
     # Least squares on the training rows, by a QR of the Jacobian shared by all replicates.
     q, r = np.linalg.qr(j_fit)
@@ -79,23 +82,51 @@ def null_z(noise: np.ndarray, jacobian: np.ndarray, fit_rows: np.ndarray, fold, 
     # Held out: per-fold mean squared residual before and after, for every replicate.
     rows = np.flatnonzero(test)
     labels, which = np.unique(fold[rows], return_inverse=True)
+    counts = np.bincount(which)
     members = np.zeros((len(rows), len(labels)))
-    members[np.arange(len(rows)), which] = 1.0 / np.bincount(which)[which]
+    members[np.arange(len(rows)), which] = 1.0 / counts[which]
     held = noise[:, :, rows]
     change = np.einsum("csk,kb->bcs", jacobian[:, rows][:, :, keep], delta)
     before = np.sum(held ** 2, axis=1) @ members
     after = np.sum((held - change) ** 2, axis=1) @ members
-    relative = (before - after) / np.maximum(before, 1e-300)
-    if len(labels) < 2:
+    return before, after, counts
+
+
+def null_z(noise: np.ndarray, jacobian: np.ndarray, fit_rows: np.ndarray, fold, test) -> np.ndarray:
+    """The held-out z of a linear hypothesis fitted to each noise replicate
+    (structure.held_out_gain_sq's statistic, for all replicates at once).
+
+    noise: (replicate, channel, sample); jacobian: (channel, sample, parameter)."""
+    errors = _null_fold_errors(noise, jacobian, fit_rows, fold, test)
+    if errors is None or errors[0].shape[1] < 2:
         return np.zeros(len(noise))
-    spread = np.std(relative, axis=1, ddof=1) / np.sqrt(len(labels))
+    before, after, _ = errors
+    relative = (before - after) / np.maximum(before, 1e-300)
+    spread = np.std(relative, axis=1, ddof=1) / np.sqrt(relative.shape[1])
     return np.mean(relative, axis=1) / np.maximum(spread, 1e-300)
 
 
+def null_gain(noise: np.ndarray, jacobian: np.ndarray, fit_rows: np.ndarray, fold, test) -> np.ndarray:
+    """The pooled held-out gain (1 - MSE after / MSE before over every held-out
+    sample, structure.HeldOutGain.gain) of a linear hypothesis fitted to each
+    noise replicate: the statistic of effects that live in time (a drift),
+    whose gain is uneven over the folds by nature."""
+    errors = _null_fold_errors(noise, jacobian, fit_rows, fold, test)
+    if errors is None:
+        return np.zeros(len(noise))
+    before, after, counts = errors
+    return 1.0 - (after @ counts) / np.maximum(before @ counts, 1e-300)
+
+
+def standardised(observed: float, null: np.ndarray) -> float:
+    """The observed statistic in standard deviations above the simulated null's mean."""
+    spread = float(np.std(null, ddof=1)) if len(null) > 1 else 1.0
+    return (observed - float(np.mean(null))) / max(spread, 1e-9)
+
+
 def p_value(z_observed: float, z_null: np.ndarray) -> float:
-    """One-sided p of the observed z against the simulated null (normal fitted to it)."""
-    spread = float(np.std(z_null, ddof=1)) if len(z_null) > 1 else 1.0
-    return float(norm.sf((z_observed - float(np.mean(z_null))) / max(spread, 1e-9)))
+    """One-sided p of the observed statistic against the simulated null (normal fitted to it)."""
+    return float(norm.sf(standardised(z_observed, z_null)))
 
 
 def benjamini_hochberg(p: list[float]) -> list[float]:

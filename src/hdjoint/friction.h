@@ -2,7 +2,8 @@
 // Motor-side friction of eq. (2): tau_fm (Coulomb, smoothed so the model stays
 // differentiable through zero speed) plus viscous Bm*omega_m; and, beyond the
 // paper (each off by default), a Stribeck rise Fs at low speed, a friction
-// level drifting with time, cogging torque on the motor and link friction.
+// level drifting with time, a torque constant warming up, cogging torque on
+// the motor and link friction.
 #include <algorithm>
 #include <cmath>
 
@@ -64,11 +65,23 @@ inline double cogging_slope(double theta_m, const Parameters& p) {
     return p.cog_order * (-p.cog_a * std::sin(w) + p.cog_b * std::cos(w));
 }
 
-// The motor's electromagnetic torque Kt*i_m, plus cogging when it is on.
-inline double motor_torque(double i_m, double theta_m, const Parameters& p) {
-    double t = p.Kt * i_m;
-    if (cogging_on(p)) t += cogging_torque(theta_m, p);
-    return t;
+// Scale of the torque constant t seconds after the start of a run, the
+// lumped first-order warm-up 1 + Kt_warmup*(1 - exp(-t/Kt_warmup_tc)):
+// Kt is proportional to the magnets' remanence Br, and sintered NdFeB grades
+// lose 0.09-0.12 %/K of it (reversible temperature coefficient of Br, magnet
+// grade data sheets), so Kt falls as the motor warms; the single thermal node
+// of motor catalogues (one thermal time constant) makes the warm-up exponential.
+// Exactly 1 when Kt_warmup = 0.
+inline double torque_constant_scale(double t, const Parameters& p) {
+    return p.Kt_warmup == 0.0 ? 1.0 : 1.0 - p.Kt_warmup * std::expm1(-t / p.Kt_warmup_tc);
+}
+
+// The motor's electromagnetic torque Kt(t)*i_m at t seconds into the run,
+// plus cogging when it is on.
+inline double motor_torque(double i_m, double theta_m, double t, const Parameters& p) {
+    double torque = p.Kt * torque_constant_scale(t, p) * i_m;
+    if (cogging_on(p)) torque += cogging_torque(theta_m, p);
+    return torque;
 }
 
 // Link-side Coulomb friction, smoothed over its own link speed omega_fl

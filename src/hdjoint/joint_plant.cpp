@@ -158,7 +158,7 @@ bool JointPlant::model(const Vector<S>& x, double t, const PlantInputs& in, Vect
     const double link_load = link_net_torque(tau, theta_l, omega_l, in.tau_ext, p_);
 
     (*dx)(0) = omega_m;
-    (*dx)(1) = (motor_torque(in.i_m, theta_m, p_) - friction - tau / p_.N) / p_.Jm;
+    (*dx)(1) = (motor_torque(in.i_m, theta_m, t, p_) - friction - tau / p_.N) / p_.Jm;
     (*dx)(2) = omega_l;
     (*dx)(3) = link_load / p_.Jl;
     if constexpr (kFull) {

@@ -62,7 +62,7 @@ bool JointSystemModel::derivative(const State& x, const Control& u, State* dx, J
     const double scale = friction_drift_scale(u.t, q);
     const double NJm = q.N * q.Jm;
     const double a_l = (T.tau - q.Bl * omega_l - q.mgl * std::sin(theta_l) - w) / q.Jl;
-    const double a_m = (motor_torque(u.i_m, theta_m, q) - motor_friction(omega_m, q, scale) - T.tau / q.N) / NJm;
+    const double a_m = (motor_torque(u.i_m, theta_m, u.t, q) - motor_friction(omega_m, q, scale) - T.tau / q.N) / NJm;
     (*dx)(kThetaL) = omega_l;
     (*dx)(kOmegaL) = a_l;
     (*dx)(kDelta) = nu;

@@ -94,7 +94,7 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
     out_.tau_hat_std = consistent(joint_.output().tau_std, joint_.output().nis, p_.Ts, p_.std_nis_time, &nis_mean_hat_);
     out_.tau_load = joint_.output().load;
     // eq. (2)'s input, with cogging, Stribeck friction and the drift when they are on.
-    previous_u_ = motor_torque(in.i_m, c.theta_m, p_) - coulomb_friction(x(0), p_, friction_drift_scale(t, p_));
+    previous_u_ = motor_torque(in.i_m, c.theta_m, t, p_) - coulomb_friction(x(0), p_, friction_drift_scale(t, p_));
     ++samples_;
 
     // Report the worst thing the filter had to do on this sample.

@@ -28,6 +28,7 @@ NEW = {
     "lugre_sigma0": ("plant", 0.0), "lugre_sigma1": ("plant", 0.0),
     "bw_A": ("plant", 0.0), "bw_beta": ("plant", 0.0), "bw_gamma": ("plant", 0.0),
     "thermal_gain": ("plant", 0.0), "thermal_tc": ("plant", 20.0), "omega_fl": ("plant", 0.01),
+    "Kt_warmup": ("shared", 0.0), "Kt_warmup_tc": ("shared", 15.0),
 }
 
 # Every effect on, at sizes a real joint could have.
@@ -36,7 +37,7 @@ EFFECTS = {
     "hys_H": 0.3, "hys_sigma": 3e4, "backlash": 5e-5, "Fs": 0.01, "omega_s": 8.0, "Fc_drift": 0.004,
     "cog_a": 0.004, "cog_b": -0.002, "i_delay": 3e-3, "Fl": 0.5,
     "lugre_sigma0": 2e4, "lugre_sigma1": 0.02, "bw_A": 5e3, "bw_beta": 2e4, "bw_gamma": 1e4,
-    "thermal_gain": 0.5, "thermal_tc": 0.5,
+    "thermal_gain": 0.5, "thermal_tc": 0.5, "Kt_warmup": -0.05, "Kt_warmup_tc": 0.4,
 }
 
 
@@ -100,7 +101,8 @@ def test_switched_off_effects_change_no_bit():
     """Each switch off, with every companion parameter moved: the paper's model, bit for bit."""
     companions = {"ke_m1_order": 5.0, "ke_m2_order": 9.0, "ke_l1_order": 0.5, "ke_l2_order": 11.0,
                   "hys_sigma": 7e5, "omega_s": 2.0, "cog_order": 13.0, "lugre_sigma1": 0.4,
-                  "bw_beta": 3.0, "bw_gamma": 4.0, "thermal_tc": 0.1, "i_delay": 0.4 * TS}
+                  "bw_beta": 3.0, "bw_gamma": 4.0, "thermal_tc": 0.1, "i_delay": 0.4 * TS,
+                  "Kt_warmup_tc": 0.2}
     t, i_m, tau_ext = drive(1500)
     ref = _core.simulate_joint(plant_params(), t, i_m, tau_ext)
     got = _core.simulate_joint(plant_params(companions), t, i_m, tau_ext)
@@ -273,7 +275,8 @@ def test_joint_fmu_equals_the_batch_path_with_effects_on():
     ("JointTorqueEstimator", "ke_m1_a", 0.1), ("JointTorqueEstimator", "cog_order", -1.0),
     ("HarmonicDriveJoint", "Fl", -1.0), ("HarmonicDriveJoint", "lugre_sigma0", -5.0),
     ("HarmonicDriveJoint", "bw_beta", 2e6), ("HarmonicDriveJoint", "thermal_gain", -0.95),
-    ("HarmonicDriveJoint", "Fs", float("nan")),
+    ("HarmonicDriveJoint", "Fs", float("nan")), ("JointTorqueEstimator", "Kt_warmup", -0.8),
+    ("HarmonicDriveJoint", "Kt_warmup_tc", 0.0), ("HarmonicDriveJoint", "Kt_warmup", 0.01),
 ])
 def test_fmu_refuses_new_parameters_out_of_range(fmu, name, value):
     with FmuInstance(fmu_path(fmu), "bad") as inst:
