@@ -230,6 +230,13 @@ class Evaluator:
         """Where `channel` compares its estimates (None: everywhere)."""
         return ~self.motor_rest if "motor" in channel.parts() and self.motor_rest.any() else None
 
+    def compared_by_channel(self) -> np.ndarray | None:
+        """(channel, sample): where each channel compares (None: everywhere in every channel)."""
+        masks = [self.compared(c) for c in self.channels]
+        if all(m is None for m in masks):
+            return None
+        return np.stack([np.ones(len(self.motor_rest), bool) if m is None else m for m in masks])
+
     def residual(self, channel: Channel, p: dict) -> np.ndarray:
         r = self.reference(channel, p) - self.estimate(channel.part, p)
         compared = self.compared(channel)
@@ -638,7 +645,7 @@ class Diagnosis:
 
     def _null_noise(self, p) -> NullNoise:
         return NullNoise(np.stack([np.where(self.used, np.nan_to_num(self.eval.residual(c, p) / self.sigma[c.name]),
-                                            0.0) for c in self.channels]))
+                                            0.0) for c in self.channels]), compared=self.eval.compared_by_channel())
 
     def candidates(self, p: dict) -> list[Effect]:
         """Effects the nominal set lacks that this recording can test."""
