@@ -201,7 +201,7 @@ class Evaluator:
         self.prep = prep
         self.channels = channels
         self.offset_rows = offset_rows
-        self.motor_rest = motor_at_rest(prep.kin, prep.rec.time)
+        self.motor_rest = motor_at_rest(prep.kin, prep.rec.time, prep.starts)
         self._cache: dict[str, tuple[tuple, np.ndarray]] = {}
         self.part_params = {part: depends_on(part) for part in ESTIMATES}
 

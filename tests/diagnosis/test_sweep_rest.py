@@ -25,11 +25,13 @@ def _rest_of(excitation, seconds=12.0, scale=1.0):
 
 
 def test_the_dwells_of_a_sweep_are_rest_and_its_moves_are_not():
-    t, rest = _rest_of(sweep)
+    t, rest = _rest_of(sweep, seconds=30.0)
     dwell = ((t % 4.5) > 3.1) & ((t % 4.5) < 4.4)   # the 1.5 s dwells, inside their edges
     moving = ((t % 4.5) > 0.5) & ((t % 4.5) < 2.5)
     assert rest[dwell].all()
     assert not rest[moving].any()
+    # The 30 s sweep ends as its last move stops: slow for less than REST_FOR, cut by the end.
+    assert rest[-40:].all()
 
 
 def test_a_slow_swing_through_zero_speed_is_not_rest():
