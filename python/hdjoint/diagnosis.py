@@ -39,6 +39,7 @@ from .calibration import RESIZE_Z, Calibrated, Prior, posterior_std, priors, rob
 from .channels import ESTIMATES, SMOOTHED_PARTS, Prepared, depends_on
 from .current_alignment import align_current
 from .forked import map_forked
+from .motor_rest import motor_at_rest
 from .friction_lookalike import SMOOTHING_LOOKALIKE, SteadyEvidence, held_speed, steady_evidence
 from .effects import ALWAYS_CALIBRATED, EFFECTS, Effect, calibrated_parameters, orthogonal_parameters, owner, testable
 from .recording import Recording
@@ -193,12 +194,14 @@ class Evaluator:
     """Torque estimates and channel residuals for a parameter set, with the
     estimates of parts whose parameters did not change reused. `offset_rows`:
     the samples whose mean a channel `free_of_mean` is compared free
-    of (default: every finite sample)."""
+    of (default: every finite sample). A channel with the motor's estimate
+    compares nothing where the motor rests (motor_rest.py): 0 there."""
 
     def __init__(self, prep: Prepared, channels: list[Channel], offset_rows: np.ndarray | None = None):
         self.prep = prep
         self.channels = channels
         self.offset_rows = offset_rows
+        self.motor_rest = motor_at_rest(prep.kin, prep.rec.time, prep.starts)
         self._cache: dict[str, tuple[tuple, np.ndarray]] = {}
         self.part_params = {part: depends_on(part) for part in ESTIMATES}
 
@@ -223,11 +226,24 @@ class Evaluator:
             return self.prep.kin.smooth(np.nan_to_num(reference))
         return reference
 
+    def compared(self, channel: Channel) -> np.ndarray | None:
+        """Where `channel` compares its estimates (None: everywhere)."""
+        return ~self.motor_rest if "motor" in channel.parts() and self.motor_rest.any() else None
+
+    def compared_by_channel(self) -> np.ndarray | None:
+        """(channel, sample): where each channel compares (None: everywhere in every channel)."""
+        masks = [self.compared(c) for c in self.channels]
+        if all(m is None for m in masks):
+            return None
+        return np.stack([np.ones(len(self.motor_rest), bool) if m is None else m for m in masks])
+
     def residual(self, channel: Channel, p: dict) -> np.ndarray:
         r = self.reference(channel, p) - self.estimate(channel.part, p)
-        if not free_of_mean(channel):
-            return r
-        return r - _finite_mean(r if self.offset_rows is None else r[self.offset_rows])
+        compared = self.compared(channel)
+        if free_of_mean(channel):
+            rows = slice(None) if self.offset_rows is None else self.offset_rows
+            r = r - _finite_mean(r[rows] if compared is None else r[rows][compared[rows]])
+        return r if compared is None else np.where(compared, r, 0.0)
 
     def residual_at(self, channel: Channel, p: dict, index: np.ndarray) -> np.ndarray:
         """The residual at `index` only: fits look at a sample of the training
@@ -239,11 +255,13 @@ class Evaluator:
             hit = (key, ESTIMATES[channel.part](self.prep, p, index))
             self._cache[slot] = hit
         r = self.reference(channel, p)[index] - hit[1]
-        if not free_of_mean(channel):
-            return r
-        if index is not self.offset_rows:
-            return self.residual(channel, p)[index]
-        return r - _finite_mean(r)
+        compared = self.compared(channel)
+        compared = None if compared is None else compared[index]
+        if free_of_mean(channel):
+            if index is not self.offset_rows:
+                return self.residual(channel, p)[index]
+            r = r - _finite_mean(r if compared is None else r[compared])
+        return r if compared is None else np.where(compared, r, 0.0)
 
 
 def _finite_mean(x: np.ndarray) -> float:
@@ -484,7 +502,8 @@ class Diagnosis:
         have no white floor), and the data's weight: one over the number of
         fit samples per independent sample, from the residual's correlation."""
         for c in self.channels:
-            used = self.eval.residual(c, p)[self.used]
+            compared = self.eval.compared(c)
+            used = self.eval.residual(c, p)[self.used if compared is None else self.used & compared]
             self.sigma[c.name] = max(float(np.sqrt(np.nanmean(used * used))), 1e-9)
         self.data_weight = min(1.0, self.stride / self._correlation_length(p))
 
@@ -664,7 +683,7 @@ class Diagnosis:
 
     def _null_noise(self, p) -> NullNoise:
         return NullNoise(np.stack([np.where(self.used, np.nan_to_num(self.eval.residual(c, p) / self.sigma[c.name]),
-                                            0.0) for c in self.channels]))
+                                            0.0) for c in self.channels]), compared=self.eval.compared_by_channel())
 
     def candidates(self, p: dict) -> list[Effect]:
         """Effects the nominal set lacks that this recording can test."""

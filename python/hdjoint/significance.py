@@ -35,8 +35,11 @@ FALSE_DISCOVERY_RATE = 0.05
 class NullNoise:
     """Phase-randomised replicates of a set of residual channels (rows)."""
 
-    def __init__(self, residuals: np.ndarray, seed: int = 0):
+    def __init__(self, residuals: np.ndarray, seed: int = 0, compared: np.ndarray | None = None):
         self.spectra = np.fft.rfft(np.nan_to_num(residuals), axis=1)
+        # (channel, sample): where a channel compares anything; its replicates
+        # are 0 elsewhere, as the data's residual is (diagnosis.Evaluator.compared).
+        self.compared = compared
         self.n = residuals.shape[1]
         rng = np.random.default_rng(seed)
         phases = rng.uniform(0.0, 2.0 * np.pi, (REPLICATES, self.spectra.shape[1]))
@@ -52,7 +55,10 @@ class NullNoise:
         key = tuple(rows)
         if key not in self._made:
             spectra = self.spectra[list(rows)]
-            self._made[key] = np.fft.irfft(spectra[None, :, :] * self.rotation[:, None, :], n=self.n, axis=2)
+            made = np.fft.irfft(spectra[None, :, :] * self.rotation[:, None, :], n=self.n, axis=2)
+            if self.compared is not None:
+                made *= self.compared[list(rows)][None, :, :]
+            self._made[key] = made
         return self._made[key]
 
     def prepare(self, row_sets: list[list[int]]) -> None:
