@@ -38,15 +38,15 @@ REST_FOR = 0.3     # s: a dwell; a swing through zero speed passes in less
 
 def motor_at_rest(kin: Kinematics, time: np.ndarray, starts: np.ndarray | None = None) -> np.ndarray:
     """True where the motor rests (|omega_m| < REST_SPEED for at least
-    REST_FOR, or up to an end of its window: `starts`, the first sample of
-    each contiguous window), widened by half the smoothing filter's window on both sides."""
+    REST_FOR, or up to the end of its window: `starts`, the first sample of
+    each contiguous window; a short start from rest is compared: the motor breaks away there), widened by half the smoothing filter's window on both sides."""
     slow = np.abs(kin.omega_m) < REST_SPEED
     rest = np.zeros(len(time), bool)
     bounds = np.append([0] if starts is None else starts, len(time))
     for lo, hi in zip(bounds[:-1], bounds[1:]):
         edges = lo + np.flatnonzero(np.diff(np.concatenate([[0], slow[lo:hi].astype(np.int8), [0]])))
         for start, stop in zip(edges[::2], edges[1::2]):
-            if start == lo or stop == hi or time[stop - 1] - time[start] >= REST_FOR:
+            if stop == hi or time[stop - 1] - time[start] >= REST_FOR:
                 rest[start:stop] = True
     reach = kin.smooth.window // 2
     return binary_dilation(rest, np.ones(2 * reach + 1, bool)) if rest.any() and reach else rest
