@@ -58,7 +58,7 @@ TOOTH_RATIO = {"joint1": 121, "joint2": 121, "joint3": 101}
 # The files' current has the robot's joint-torque sign, their encoders their own counting direction:
 # the source log's link encoders of joints 1 and 2 count against the robot's joint angle (-2^24/(2 pi)
 # counts per rad of `joint_angles_k`), joint 3's with it. CONTRACT.md wants positive torque to drive
-# the encoders positive, so joints 1 and 2 are read with i_m negated (docs/diagnosis.md, "Real data":
+# the encoders positive, so joints 1 and 2 are read with i_m negated (docs/diagnosis_lara8.md, "What the recordings are made of":
 # the motor inertia comes out negative otherwise).
 CURRENT_SIGN = {"joint1": -1.0, "joint2": -1.0, "joint3": 1.0}
 JOINTS = {"joint1": ["joint1_jog.csv", "joint1_jog_linear_mass.csv"], "joint2": ["joint2_jog_joint_mass.csv"],

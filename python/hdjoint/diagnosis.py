@@ -323,8 +323,8 @@ class Hypothesis:
         """A stationary effect helps most held-out folds, by z > 3 over them. A
         drift helps the folds far from the run's mean temperature, not the rest:
         its evidence is its pooled gain against the simulated null, which is
-        its p-value restated, so the p-value alone decides (docs/diagnosis.md,
-        "Thermal drift of Kt", for the false alarms this gives on controls)."""
+        its p-value restated, so the p-value alone decides (docs/diagnosis_measurements.md,
+        "Thermal drift of Kt: the law and its test", for the false alarms this gives on controls)."""
         if self.z_against_null is not None:
             return True
         return self.gain.z > 3.0 and np.mean(self.gain.fold_gains > 0) >= 0.7

@@ -10,7 +10,7 @@ against it: N*Fc = 1.5 N.m of motor-channel residual for a third of the
 recording. Calibration then moved Jm to 2.3-4x and Kt to 0.7-0.8x on every
 LuGre sweep, controls included, and no hypothesis of the motor's part
 could be confirmed over it. The same truths with a tanh law do not move
-them (docs/diagnosis.md, "Sweeps").
+them (docs/diagnosis_measurements.md, "Sweeps: the motor at rest").
 
 So a channel with the motor's estimate compares nothing where the motor
 rests (its residual there is 0 before and after every hypothesis), widened

@@ -1,5 +1,5 @@
-"""The motor at rest on a sweep with dwells (docs/diagnosis.md, "Sweeps: the
-motor at rest"): static friction holds there what no speed law can say, and
+"""The motor at rest on a sweep with dwells (docs/diagnosis_measurements.md,
+"Sweeps: the motor at rest"): static friction holds there what no speed law can say, and
 the motor channel does not compare it."""
 import numpy as np
 import pytest

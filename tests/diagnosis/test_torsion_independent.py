@@ -1,7 +1,7 @@
 """Torsion-side effects on the independent truth (hdjoint.truth; issue 10,
 items 2, 3, 4, 7): the transmission channel no longer hides them behind the
 flexspline's structural damping, and the hysteresis hypothesis follows the
-torsion the encoders can resolve (docs/diagnosis.md, "Torsion-side effects").
+torsion the encoders can resolve (docs/diagnosis_measurements.md, "Torsion-side effects").
 
 The truth's hysteresis is a Bouc-Wen loop of +-0.1 N.m that switches over
 3e-6 rad of torsion; its structural damping (Df = 2-8 N.m.s/rad) is most of
