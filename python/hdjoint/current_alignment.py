@@ -15,9 +15,11 @@ current at t is the logged one at t + shift), fitted once on the motor
 channels after the first calibration pass. Anything beyond it is a delay
 of the current (the `time_delay` effect, i_delay >= 0, tested on top).
 
-Within one sample the interpolated current is linear in the shift, so the
-residual is too: one Gauss-Newton step is the least-squares optimum, and
-its curvature the interval."""
+Within one sample the charge the motor equation differentiates
+(channels.current_charge) is quadratic in the shift, so the residual is
+nearly linear in it: one secant step between 0 and -Ts/2 is the
+least-squares optimum up to the current's change within a sample, and its
+curvature the interval."""
 from __future__ import annotations
 
 import math
