@@ -37,13 +37,16 @@ def params():
 
 
 def _prepared(t, i_m, out):
-    """A recording of the true motion, with exact speeds and central-difference accelerations."""
+    """A recording of the true motion, with exact speeds and central-difference
+    accelerations; its "smoothing" is none, and its derivative (the current
+    is read as the derivative of its charge) a central difference too."""
     rec = Recording(time=t, i_m=i_m, theta_m=out["theta_m"], theta_l=out["theta_l"], tau_sensor=None,
                     extra={}, path=None)
     omega_m, omega_l = out["omega_m"], out["omega_link"]
     alpha_m, alpha_l = np.gradient(omega_m, DT), np.gradient(omega_l, DT)  # central differences
     kin = Kinematics(omega_m=omega_m, alpha_m=alpha_m, omega_l=omega_l, alpha_l=alpha_l,
-                     smooth=lambda x: np.asarray(x, float), valid=np.ones(len(t), bool))
+                     smooth=lambda x, deriv=0: np.gradient(np.asarray(x, float), t) if deriv else np.asarray(x, float),
+                     valid=np.ones(len(t), bool))
     return channels.Prepared(rec, kin, t - t[0])
 
 
