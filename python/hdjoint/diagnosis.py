@@ -45,7 +45,7 @@ from .effects import ALWAYS_CALIBRATED, EFFECTS, Effect, calibrated_parameters, 
 from .recording import Recording
 from .significance import FALSE_DISCOVERY_RATE, NullNoise, benjamini_hochberg, null_gain, null_z, p_value, standardised
 from .signals import folds as make_folds, kinematics, sample_windows, window_labels
-from .structure import HeldOutGain, Order, candidate_orders, held_out_gain_sq, order_search
+from .structure import HeldOutGain, Order, candidate_orders, fold_z, held_out_gain_sq, order_search
 from .timebase import GAP_FACTOR
 
 MIN_SAMPLES = 500
@@ -327,7 +327,7 @@ class Hypothesis:
         "Thermal drift of Kt: the law and its test", for the false alarms this gives on controls)."""
         if self.z_against_null is not None:
             return True
-        return self.gain.z > 3.0 and np.mean(self.gain.fold_gains > 0) >= 0.7
+        return self.gain.z > 3.0 and self.gain.folds_improved >= 0.7 * self.gain.folds_compared
 
 
 @dataclass
@@ -419,8 +419,11 @@ class Diagnosis:
         self.tested: list[list[dict]] = []  # every hypothesis tried, per round (evidence for the report)
 
     def shown_residual(self, channel: Channel, p: dict) -> np.ndarray:
-        """The residual for figures and figures of merit: NaN where no test looks."""
-        return np.where(self.used, self.eval.residual(channel, p), np.nan)
+        """The residual for figures, figures of merit and the search for
+        structure: NaN where no test looks, nor the channel (the motor at rest)."""
+        compared = self.eval.compared(channel)
+        looked = self.used if compared is None else self.used & compared
+        return np.where(looked, self.eval.residual(channel, p), np.nan)
 
     def channels_of(self, part: str) -> list[Channel]:
         return [c for c in self.channels if part in c.parts()]
@@ -538,7 +541,9 @@ class Diagnosis:
         found: dict[tuple[str, float], Order] = {}
         self._orders_seen = []
         for channel in channels:
-            r = self.eval.residual(channel, p)
+            # Not the fit's residual, 0 where the channel is blind: a ripple's
+            # prediction there counted as error (and a fold of rest, 0/0, as -1e295).
+            r = self.shown_residual(channel, p)
             for angle in angles:
                 values, seen = getattr(self.rec, angle), []
                 for o in order_search(values, r, self.fold, self.train, self.test,
@@ -815,9 +820,7 @@ def _why_no_order(effect: Effect, strongest: Order | None) -> str:
 
 def _separated(best: Hypothesis, rival: Hypothesis) -> bool:
     """The better hypothesis explains clearly more held-out structure than the rival, fold by fold."""
-    d = best.gain.fold_gains - rival.gain.fold_gains
-    spread = np.std(d, ddof=1) / math.sqrt(len(d)) if len(d) > 1 else np.inf
-    clearly = spread > 0 and np.mean(d) / spread > SEPARATED_Z
+    clearly = fold_z(best.gain.fold_gains - rival.gain.fold_gains) > SEPARATED_Z
     return bool(clearly and rival.gain.gain <= SEPARATED_RATIO * best.gain.gain)
 
 

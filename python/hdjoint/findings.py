@@ -205,7 +205,7 @@ def finding_document(result, f) -> dict:
         "z": round(h.gain.z, 2),
         **h.drift_evidence(),
         "p_value_raw": h.p_raw,
-        "folds_improved": f"{int(np.sum(h.gain.fold_gains > 0))}/{len(h.gain.fold_gains)}",
+        "folds_improved": f"{h.gain.folds_improved}/{h.gain.folds_compared}",
         "delta_bic": round(h.delta_bic, 1),
         "runner_up": ({"effect": f.runner_up.effect.id, "held_out_gain": round(f.runner_up.gain.gain, 5)}
                       if f.runner_up else None),

@@ -22,6 +22,7 @@ import numpy as np
 
 from .effects import Effect
 from .signals import Kinematics
+from .structure import fold_z, relative_fold_gains
 
 # The speed range a Stribeck rise is tested over (the effect's `revealed_by`).
 STRIBECK_SPEEDS = (0.5, 20.0)  # rad/s
@@ -76,19 +77,14 @@ def steady_evidence(before: np.ndarray, after: np.ndarray, held: np.ndarray, fol
     improvement = np.nansum((before - after)[test])
     steady_share = float(np.sum((before - after)[rows]) / improvement) if improvement > 0 else 0.0
     share = float(np.count_nonzero(rows) / max(np.count_nonzero(test), 1))
-    relative = []
-    for f in np.unique(fold[rows]):
-        here = rows & (fold == f)
-        if np.count_nonzero(here) >= MIN_HELD_SAMPLES:
-            b = np.mean(before[here])
-            relative.append((b - np.mean(after[here])) / max(b, 1e-300))
+    means = [(np.mean(before[here]), np.mean(after[here])) for here in (rows & (fold == f) for f in np.unique(fold[rows]))
+             if np.count_nonzero(here) >= MIN_HELD_SAMPLES]
+    relative = relative_fold_gains(*np.array(means).reshape(-1, 2).T)
+    relative = relative[np.isfinite(relative)]
     if len(relative) < MIN_HELD_FOLDS:
         return SteadyEvidence(share, float("nan"), float("nan"), len(relative), steady_share)
-    relative = np.array(relative)
-    spread = np.std(relative, ddof=1) / np.sqrt(len(relative))
     gain = 1.0 - float(np.mean(after[rows]) / max(np.mean(before[rows]), 1e-300))
-    z = float(np.mean(relative) / spread) if spread > 0 else float("inf")
-    return SteadyEvidence(share, gain, z, len(relative), min(max(steady_share, 0.0), 1.0))
+    return SteadyEvidence(share, gain, fold_z(relative), len(relative), min(max(steady_share, 0.0), 1.0))
 
 
 

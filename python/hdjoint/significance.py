@@ -27,6 +27,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.stats import norm
 
+from .structure import relative_fold_gains
+
 
 REPLICATES = 48
 FALSE_DISCOVERY_RATE = 0.05
@@ -107,9 +109,11 @@ def null_z(noise: np.ndarray, jacobian: np.ndarray, fit_rows: np.ndarray, fold, 
     if errors is None or errors[0].shape[1] < 2:
         return np.zeros(len(noise))
     before, after, _ = errors
-    relative = (before - after) / np.maximum(before, 1e-300)
-    spread = np.std(relative, axis=1, ddof=1) / np.sqrt(relative.shape[1])
-    return np.mean(relative, axis=1) / np.maximum(spread, 1e-300)
+    relative = relative_fold_gains(before, after)  # the replicates are blind where the recording is
+    compared = np.count_nonzero(np.isfinite(relative), axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        spread = np.nanstd(relative, axis=1, ddof=1) / np.sqrt(compared)
+        return np.nan_to_num(np.nanmean(relative, axis=1) / np.maximum(spread, 1e-300))
 
 
 def null_gain(noise: np.ndarray, jacobian: np.ndarray, fit_rows: np.ndarray, fold, test) -> np.ndarray:

@@ -1,0 +1,71 @@
+"""Held-out folds where a channel compares nothing (the motor at rest: its
+residual is 0 before and after every hypothesis) say nothing about a
+hypothesis. Counted as folds of zero gain they held a motor effect's z to a
+third on a sweep with dwells, and the share of improved folds below the 70 %
+the acceptance asks for; in the order search (NaN there) a fold of rest made
+the z of every ripple 0, and cogging on that sweep was never tested."""
+import numpy as np
+import pytest
+
+from hdjoint.significance import null_z
+from hdjoint.signals import folds
+from hdjoint.structure import held_out_gain_sq, order_search
+
+N, FOLDS = 8000, 40
+
+
+def _layout():
+    fold = folds(N, FOLDS)
+    test = fold % 2 == 1
+    blind = np.isin(fold, np.arange(3, FOLDS, 4))  # every other held-out fold rests: half of them blind
+    return fold, test, blind
+
+
+def test_blind_folds_are_left_out_of_the_fold_z():
+    rng = np.random.default_rng(1)
+    fold, test, blind = _layout()
+    before = rng.chisquare(1, N)
+    after = before * (0.8 + 0.02 * rng.standard_normal(N))  # a steady 20 % gain where the channel looks
+    seen = held_out_gain_sq(before, after, fold, test)
+    before[blind], after[blind] = 0.0, 0.0
+    masked = held_out_gain_sq(before, after, fold, test)
+    assert masked.folds_compared == seen.folds_compared // 2
+    assert masked.folds_improved == masked.folds_compared  # not 50 % of all folds: the acceptance's 70 % holds
+    # Over the folds that look, the same evidence as a recording of that length alone (no flood of zeros).
+    looking = np.isfinite(masked.fold_gains)
+    assert masked.z == pytest.approx(np.mean(seen.fold_gains[looking]) / (
+        np.std(seen.fold_gains[looking], ddof=1) / np.sqrt(looking.sum())), rel=1e-9)
+
+
+def test_order_search_finds_a_ripple_beside_rests():
+    """A ripple of the motor angle in a residual that is NaN over whole folds (where the motor rests)."""
+    rng = np.random.default_rng(2)
+    fold, test, blind = _layout()
+    theta = np.linspace(0.0, 60 * 2 * np.pi, N)
+    residual = 0.3 * np.cos(4.0 * theta + 0.4) + rng.standard_normal(N)
+    residual[blind] = np.nan
+    found = order_search(theta, residual, fold, ~test, test, [k / 2 for k in range(1, 13)])
+    assert found and found[0].order == 4.0
+    assert found[0].gain.z > 3.0 and found[0].gain.folds_compared == 10
+
+
+def test_null_z_leaves_out_the_same_folds():
+    """The simulated null's statistic is the observed one's: on a replicate,
+    null_z equals held_out_gain_sq's z of the same linear fit on the samples
+    the channel looks at (the blind ones deleted)."""
+    rng = np.random.default_rng(3)
+    fold, test, blind = _layout()
+    train = ~test
+    x = np.linspace(0.0, 20.0, N)
+    jac = np.stack([np.sin(x), np.cos(3 * x)], axis=1)[None, :, :]  # (channel, sample, parameter)
+    jac[:, blind, :] = 0.0
+    noise = rng.standard_normal((5, 1, N))
+    noise[:, :, blind] = 0.0
+    z = null_z(noise, jac, np.flatnonzero(train), fold, test)
+    for replicate in range(len(noise)):
+        e = noise[replicate, 0]
+        delta = np.linalg.lstsq(jac[0][train], e[train], rcond=None)[0]
+        look = ~blind
+        direct = held_out_gain_sq(e[look] ** 2, (e - jac[0] @ delta)[look] ** 2, fold[look], test[look])
+        assert np.isfinite(z[replicate])
+        assert z[replicate] == pytest.approx(direct.z, rel=1e-6)
