@@ -200,7 +200,12 @@ def order_search(angle, residual, fold, train, test, orders, exclude=(), name="t
         basis = _basis(angle, k, through)
         coef = _harmonic_coefficients(basis, res, train)
         pred, amp = coef[:2] @ basis[:2], float(np.hypot(coef[0], coef[1]))
-        floor = np.median([np.hypot(*_floor_coefficients(angle, k + d, through, res, floor_rows)[:2])
+        # The floor is read off what the order leaves: a strong ripple's own
+        # leakage into its off-orders (a sweep visits its angles unevenly) is
+        # not broadband structure. With it, cogging on the sweep, z = 7.1 and
+        # 68 % of the held-out motor residual, stood 2.8 times over its floor.
+        rest = np.where(ok, res - pred, 0.0)
+        floor = np.median([np.hypot(*_floor_coefficients(angle, k + d, through, rest, floor_rows)[:2])
                            for d in offsets])
         found.append(Order(name, float(k), amp, held_out_gain(res, pred, fold, test), amp / max(floor, 1e-300)))
     if seen is not None:

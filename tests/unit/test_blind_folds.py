@@ -12,6 +12,7 @@ from hdjoint.signals import folds
 from hdjoint.structure import held_out_gain_sq, order_search
 
 N, FOLDS = 8000, 40
+SMOOTHING = 8.0  # samples
 
 
 def _layout():
@@ -69,3 +70,25 @@ def test_null_z_leaves_out_the_same_folds():
         direct = held_out_gain_sq(e[look] ** 2, (e - jac[0] @ delta)[look] ** 2, fold[look], test[look])
         assert np.isfinite(z[replicate])
         assert z[replicate] == pytest.approx(direct.z, rel=1e-6)
+
+
+def _sweep_angle(n):
+    """A motor angle that goes back and forth over uneven ranges (point-to-point
+    moves with reversals, as the benchmark's sweep), about 26 revolutions end to end."""
+    targets = 2 * np.pi * 100 * np.array([0.0, 0.7, -0.4, 0.9, -0.8, 0.3, -0.6, 0.8, 0.0, -0.5, 0.6, 0.0]) / 6.6
+    x = np.linspace(0.0, len(targets) - 1, n, endpoint=False)
+    k, s = x.astype(int), x % 1.0
+    return targets[k] + (targets[k + 1] - targets[k]) * s ** 3 * (10 - 15 * s + 6 * s * s)
+
+
+def test_a_strong_ripple_stands_out_of_its_own_leakage():
+    """Cogging on the sweep: the order's fit leaks into its off-orders as the
+    sweep visits angles unevenly; the floor is read off what the order leaves."""
+    from scipy.ndimage import gaussian_filter1d
+    rng = np.random.default_rng(4)
+    fold, test, _ = _layout()
+    theta = _sweep_angle(N)
+    smoothed = lambda x: gaussian_filter1d(x, SMOOTHING)  # noqa: E731 (the motor channel's filter)
+    residual = smoothed(0.15 * np.cos(6.0 * theta + 1.0)) + 0.005 * rng.standard_normal(N)
+    found = order_search(theta, residual, fold, ~test, test, [k / 2 for k in range(1, 25)], through=smoothed)
+    assert found and found[0].order == 6.0 and found[0].prominence > 3.0
