@@ -1,9 +1,9 @@
 """Held-out folds where a channel compares nothing (the motor at rest: its
 residual is 0 before and after every hypothesis) say nothing about a
-hypothesis. Counted as folds of zero gain they held a motor effect's z to a
-third on a sweep with dwells, and the share of improved folds below the 70 %
-the acceptance asks for; in the order search (NaN there) a fold of rest made
-the z of every ripple 0, and cogging on that sweep was never tested."""
+hypothesis. Counted as folds of zero gain they capped a motor effect's z on
+a sweep with dwells, and kept the share of improved folds below the 70 %
+the acceptance asks for; in the order search a fold of rest made the z of
+every ripple 0, and cogging on that sweep was never tested."""
 import numpy as np
 import pytest
 
