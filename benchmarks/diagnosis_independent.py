@@ -29,6 +29,8 @@ ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "docs" / "results" / "diagnosis_independent.jsonl"
 TABLE = ROOT / "docs" / "results" / "diagnosis_independent.md"
 GOALS = {"false_alarms": 0.05, "named_first": 0.90, "closure": 0.90}
+FIRST_ROUND_KEYS = ("effect", "held_out_gain", "z", "p_value", "delta_bic", "folds_improved", "worst_channel_ratio",
+                    "degenerate", "z_against_null", "accepted")
 
 
 def _named(finding: dict) -> set[str]:
@@ -42,8 +44,9 @@ def _summary(doc: dict) -> dict:
                           "named": sorted(_named(f)), "p_value": f.get("p_value")} for f in doc["findings"]],
             "unexplained": len(doc.get("unexplained") or []),
             "proposed_terms": [t.get("terms") for t in doc.get("proposed_terms") or []],
-            # What the first round of tests saw, so acceptance rules can be compared offline.
-            "first_round": [{k: h[k] for k in ("effect", "held_out_gain", "z", "p_value", "delta_bic", "accepted")}
+            # What the first round of tests saw, with every input of the acceptance
+            # rule (Hypothesis.accepted), so other rules can be compared offline.
+            "first_round": [{k: h[k] for k in FIRST_ROUND_KEYS if k in h}
                             for h in (doc.get("hypotheses_tested") or [[]])[0]],
             "cannot_tell": [c["effect"] for c in doc.get("cannot_tell") or [] if "effect" in c]}
 

@@ -718,6 +718,8 @@ class Diagnosis:
             tried.sort(key=lambda h: -h.gain.gain)
             self.tested.append([{"effect": h.effect.id, "held_out_gain": round(h.gain.gain, 5),
                                  "z": round(h.gain.z, 2), "p_value": h.p_value, "delta_bic": round(h.delta_bic, 1),
+                                 "folds_improved": f"{h.gain.folds_improved}/{h.gain.folds_compared}",
+                                 "worst_channel_ratio": round(h.worst_channel_ratio, 4),
                                  "accepted": h.accepted(), **({"degenerate": h.degenerate} if h.degenerate else {}),
                                  **h.drift_evidence()}
                                 for h in tried])

@@ -60,3 +60,13 @@ def test_how_often_a_control_carries_a_cannot_tell_caveat(tmp_path):
             row("control on sweep", [], run("consistent"))]  # an older row: not counted
     text = bench.write_table(rows, tmp_path / "table.md")
     assert "| controls where `cannot_tell` names an effect (a `consistent` verdict's caveat) | 1/2 (50 %)" in text
+
+
+def test_the_first_round_keeps_every_input_of_the_acceptance_rule():
+    """So that another acceptance rule can be scored on the recorded rows without rerunning them."""
+    tested = {"effect": "backlash", "held_out_gain": 0.1, "z": 2.05, "p_value": 0.03, "delta_bic": -741.0,
+              "folds_improved": "12/13", "worst_channel_ratio": 0.98, "degenerate": "a dead zone", "accepted": False,
+              "not an input": 1}
+    doc = {"verdict": "consistent", "findings": [], "hypotheses_tested": [[tested]]}
+    first = bench._summary(doc)["first_round"][0]
+    assert first == {k: v for k, v in tested.items() if k != "not an input"}

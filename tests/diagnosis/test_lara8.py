@@ -115,6 +115,8 @@ def test_a_dead_zone_wider_than_the_torsion_does_not_blind_the_transmission():
     assert "backlash" not in [f["effect"] for f in doc["findings"]]
     backlash = next(h for h in doc["hypotheses_tested"][0] if h["effect"] == "backlash")
     assert "carries no torque" in backlash["degenerate"] and not backlash["accepted"]
+    # Every input of the acceptance rule is on record (benchmarks compare rules offline).
+    assert {"folds_improved", "worst_channel_ratio", "delta_bic", "p_value", "z"} <= set(backlash)
     aw1 = doc["calibration"]["aw1"]
     # Moved off its nominal value, with an interval around it. (Widened by its
     # model-form factor, 1.8, that interval now reaches past the nominal value.)
