@@ -93,11 +93,7 @@ def oracle_test(case, seed: int, duration: float) -> dict:
         fitted = [n for n in values if not n.endswith("order")]
         effect = replace(EFFECTS[effect_id], starts=(values,),
                          candidates=lambda e, q, search: (dict(q, **values), fitted, []))
-        channels = diag.channels_of(effect.part)
-        diag._noise = diag._null_noise(p)
-        diag._noise.prepare([[diag.channels.index(c) for c in channels]])
-        h = diag._try(effect, p)
-    h.p_value = h.p_raw  # one hypothesis: nothing to adjust over
+        h = diag.test_alone(effect, p)
     return dict(row, held_out_gain=round(h.gain.gain, 5), z=round(h.evidence_z(), 2), p_value=h.p_raw,
                 delta_bic=round(h.delta_bic, 1), worst_channel_ratio=round(h.worst_channel_ratio, 3),
                 degenerate=h.degenerate, fitted={n: h.params_after[n] for n in values},

@@ -686,6 +686,17 @@ class Diagnosis:
             self._fitted_before[h.effect.id] = {n: h.params_after[n] for n in h.fitted}
         return tried
 
+    def test_alone(self, effect: Effect, p: dict) -> Hypothesis | None:
+        """One hypothesis tested on its own, as a round of `select` tests each
+        (its simulated null included); its p-value is its raw one, with nothing
+        to adjust over. None when this recording has no channel for it."""
+        self._noise = self._null_noise(p)
+        self._noise.prepare([[self.channels.index(c) for c in self.channels_of(effect.part)]])
+        hypothesis = self._try(effect, p)
+        if hypothesis is not None:
+            hypothesis.p_value = hypothesis.p_raw
+        return hypothesis
+
     def _null_noise(self, p) -> NullNoise:
         return NullNoise(np.stack([np.where(self.used, np.nan_to_num(self.eval.residual(c, p) / self.sigma[c.name]),
                                             0.0) for c in self.channels]), compared=self.eval.compared_by_channel())

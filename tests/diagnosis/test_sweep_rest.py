@@ -60,3 +60,20 @@ def test_a_lugre_sweep_control_calibrates_jm_and_kt_near_the_truth():
     for name in ("Jm", "Kt"):
         off = (p[name] - joint.truth[name]) / diag.priors[name].std
         assert abs(off) < 2.0, (name, p[name] / joint.nominal[name], joint.truth[name] / joint.nominal[name])
+
+
+@pytest.mark.slow
+def test_cogging_is_tested_and_accepted_on_the_sweep_with_dwells():
+    """Seed 2's cogging case (order 6 of the motor angle, first recording a
+    sweep): 7 of 20 held-out folds rest. Counted as folds, they made the z of
+    every motor-angle order 0, and the diagnosis said `thermal_drift`
+    (docs/diagnosis_measurements.md, "Blind folds")."""
+    from hdjoint.effects import EFFECTS
+    from hdjoint.truth.cases import EFFECT_CASES
+    joint = draw(next(c for c in EFFECT_CASES if c.name == "cogging"), 2)
+    assert joint.setups[0].excitation == "sweep" and joint.truth["cog_order"] == 6.0
+    diag = Diagnosis(record(joint, 0), joint.nominal, workers=1)
+    p, diag.last_fit = diag.calibrate()
+    h = diag.test_alone(EFFECTS["cogging"], p)
+    assert h is not None and [o.order for o in h.orders] == [6.0]
+    assert h.accepted() and h.gain.folds_compared < 20
