@@ -35,6 +35,8 @@ class HeldOutGain:
 def fold_z(relative: np.ndarray) -> float:
     """Mean over the folds that compare something (finite) / its standard error."""
     r = relative[np.isfinite(relative)]
+    if not len(r):
+        return 0.0  # no fold compares anything: no evidence
     spread = np.std(r, ddof=1) / np.sqrt(len(r)) if len(r) > 1 else np.inf
     return float(np.mean(r) / spread) if spread > 0 else (np.inf if len(r) and np.mean(r) > 0 else 0.0)
 

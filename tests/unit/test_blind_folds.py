@@ -9,7 +9,7 @@ import pytest
 
 from hdjoint.significance import null_z
 from hdjoint.signals import folds
-from hdjoint.structure import held_out_gain_sq, order_search
+from hdjoint.structure import fold_z, held_out_gain_sq, order_search
 
 N, FOLDS = 8000, 40
 SMOOTHING = 8.0  # samples
@@ -92,3 +92,7 @@ def test_a_strong_ripple_stands_out_of_its_own_leakage():
     residual = smoothed(0.15 * np.cos(6.0 * theta + 1.0)) + 0.005 * rng.standard_normal(N)
     found = order_search(theta, residual, fold, ~test, test, [k / 2 for k in range(1, 25)], through=smoothed)
     assert found and found[0].order == 6.0 and found[0].prominence > 3.0
+
+
+def test_no_fold_compared_is_no_evidence():
+    assert fold_z(np.array([np.nan, np.nan, np.nan])) == 0.0
