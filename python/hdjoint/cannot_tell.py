@@ -45,7 +45,10 @@ def unsettled_hypotheses(last_round: list[dict], unexplained: list[dict]) -> lis
 
 
 def _not_enough(h: dict) -> str:
-    """Why the evidence fell short: the folds (a stationary effect), or the simulated null (a drift)."""
+    """Why the evidence fell short: the fit is not the effect, the folds (a
+    stationary effect), or the simulated null (a drift)."""
+    if "degenerate" in h:
+        return f"its fit is not the effect: {h['degenerate']}"
     if "z_against_null" in h:
         return (f"no more than the residual's own slow wander would (z = {h['z_against_null']:.2g} against the "
                 f"simulated null, p = {h['p_value']:.2g})")

@@ -128,6 +128,24 @@ def _dead_zone_swallowing_the_torsion(p: dict, torsion_span: float) -> str | Non
             f"({torsion_span:.2g} rad): a transmission that carries no torque, not lost motion")
 
 
+def _rise_inside_the_switch(p: dict, torsion_span: float) -> str | None:
+    """A Stribeck rise narrower than the Coulomb law's own smoothing is no
+    rise: the law is (Fc + Fs*exp(-(w/omega_s)^2))*tanh(w/omega_fc), so with
+    omega_s below omega_fc the extra level lives only where tanh is still
+    switching, and beyond omega_fc friction is Fc again. What it fits is the
+    shape of the switch through zero speed, a Coulomb law of another shape
+    (a sharper or two-stage switch, LuGre's bristles). On the independent
+    truth's tanh joints (smoothing 0.115 rad/s, nothing missing) a multisine
+    fitted omega_s = 0.19 rad/s beside omega_fc = 0.40 (p = 4e-6), a law that
+    nowhere exceeds Fc; on a LuGre control omega_s = 0.0038 rad/s with
+    Fs = 300 Fc (docs/diagnosis_measurements.md, "Stribeck inside the switch")."""
+    if p["omega_s"] >= p["omega_fc"]:
+        return None
+    return (f"the fitted rise (omega_s = {p['omega_s']:.2g} rad/s) lies inside the Coulomb law's own switch "
+            f"(omega_fc = {p['omega_fc']:.2g} rad/s): it reshapes friction while the speed passes through zero, "
+            f"a Coulomb law of another shape, not friction above Fc at low speed")
+
+
 def _nonzero(*names):
     return lambda p: any(p.get(n, 0.0) != 0.0 for n in names)
 
@@ -189,7 +207,7 @@ EFFECTS: dict[str, Effect] = {e.id: e for e in [
                                    {"Fs": 0.02, "omega_s": 50.0}),
            needs="low_speed", lookalikes=("coulomb_friction",),
            revealed_by="slow constant speeds (0.5-20 rad/s) held in both directions, not only passed through",
-           resizes=("Fs", "omega_s")),
+           resizes=("Fs", "omega_s"), degenerate=_rise_inside_the_switch),
     Effect("viscous_friction", "motor", ("Bm",),
            "viscous friction proportional to motor speed", "Bm*omega_m", _nonzero("Bm"),
            starts=({"Bm": 2e-5}, {"Bm": 1e-4}), needs="speed", lookalikes=("time_delay",),
