@@ -55,3 +55,28 @@ def test_too_few_held_folds_cannot_separate():
     held = held_speed(_kinematics(omega), TIME)
     e = steady_evidence(np.ones(len(TIME)) * 2, np.ones(len(TIME)), held, FOLD, TEST)
     assert not e.separates and np.isnan(e.z)
+
+
+def _peak_over_fc(fitted: dict) -> float:
+    """The fitted law's largest friction over speed (the C++ law), in units of Fc."""
+    from hdjoint import parameters
+    from hdjoint.channels import motor_friction
+    p = dict(parameters.defaults(), Bm=0.0, **fitted)
+    speed = np.geomspace(1e-4, 50.0, 4000)
+    return float(np.max(motor_friction(p, speed, 0.0 * speed)) / p["Fc"])
+
+
+def test_a_rise_inside_the_coulomb_switch_is_no_stribeck_rise():
+    from hdjoint.effects import EFFECTS
+    degenerate = EFFECTS["stribeck_friction"].degenerate
+    # The fit on the independent truth's tanh joint (smoothing 0.115 rad/s, no
+    # Stribeck): twice Fc, but inside the switch, so the law never exceeds Fc.
+    inside = {"Fc": 0.0157, "Fs": 0.031, "omega_s": 0.19, "omega_fc": 0.396}
+    assert _peak_over_fc(inside) <= 1.0 + 1e-9
+    assert "inside the Coulomb law's own switch" in degenerate(inside, 0.0)
+    # A LuGre control's spike at 4 mrad/s is inside the switch too.
+    assert degenerate({"Fs": 4.1, "omega_s": 0.0038, "omega_fc": 0.22}, 0.0)
+    # A Stribeck rise as the truth plants it (omega_s ~ 8 rad/s) stands above Fc and is one.
+    rise = {"Fc": 0.015, "Fs": 0.01, "omega_s": 8.0, "omega_fc": 0.3}
+    assert _peak_over_fc(rise) > 1.5
+    assert degenerate(rise, 0.0) is None
