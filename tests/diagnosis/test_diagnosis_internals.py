@@ -73,3 +73,21 @@ def test_the_transmission_estimate_does_not_lag_by_the_current_delay(diag):
     p = dict(diag.nominal, wg_load=0.0)
     late = tau_transmission(diag.prep, dict(p, i_delay=2e-3))
     assert np.nanmax(np.abs(late - tau_transmission(diag.prep, p))) > 0
+
+
+def test_the_torsion_rate_is_reused_across_non_geometric_parameters_and_stays_exact(diag):
+    """The damping's torsion rate depends on the geometry (N, eq. (7), its
+    extra orders) alone: it is recomputed only when that changes, and the
+    reused rate is the one the whole parameter set gives."""
+    from hdjoint import channels, parameters
+    p = dict(diag.nominal, Df=4.0)
+    first = channels.torsion_rate(diag.prep, p)
+    moved = dict(p, Kf=0.8 * p["Kf"], Cf=2.0 * p.get("Cf", 0.0) + 1e-3, Kt=1.1 * p["Kt"], Kw=7.0, Cw=3.0)
+    assert channels.torsion_rate(diag.prep, moved) is first  # reused, not recomputed
+    full = parameters.for_estimator(dict(moved, Kw=1e9, hys_H=0.0, backlash=0.0, i_delay=0.0))
+    rec = diag.prep.rec
+    torsion = channels._core.compliance(full, rec.i_m, rec.theta_m, rec.theta_l)["dtheta_f"]
+    exact = diag.prep._sharp(np.nan_to_num(torsion), 1)
+    # (what differs is the rigid wave generator's 1e-11 rad left at Kw = 1e9, with Kt at its default)
+    np.testing.assert_allclose(first, exact, rtol=0, atol=1e-6 * np.std(exact))
+    assert channels.torsion_rate(diag.prep, dict(moved, al1=3e-4)) is not first  # geometry: recomputed
