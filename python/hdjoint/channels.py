@@ -83,10 +83,13 @@ def _get(p: dict, name: str) -> float:
 TORSION_RATE_SIGMA = 0.0015  # s
 
 
-# What the torsion less the kinematic error depends on (transmission.cpp:
-# total_torsion, kinematic_error): the ratio and eq. (7) with its extra orders.
-GEOMETRY_PARAMETERS = ("N", "a0", "al1", "bl1", "omega_l", "aw1", "bw1", "aw2", "bw2", "omega_w") + tuple(
-    f"{slot}_{k}" for slot in ("ke_m1", "ke_m2", "ke_l1", "ke_l2") for k in ("order", "a", "b"))
+# The kinematic error's terms (transmission.cpp, kinematic_error): eq. (7)'s
+# amplitudes, and the slots of its extra orders (<slot>_order, <slot>_a, <slot>_b).
+KINEMATIC_EQ7 = ("al1", "bl1", "aw1", "bw1", "aw2", "bw2")
+KINEMATIC_EXTRA = ("ke_m1", "ke_m2", "ke_l1", "ke_l2")
+# What the torsion less the kinematic error depends on (total_torsion, kinematic_error).
+GEOMETRY_PARAMETERS = ("N", "a0", "omega_l", "omega_w") + KINEMATIC_EQ7 + tuple(
+    f"{slot}_{k}" for slot in KINEMATIC_EXTRA for k in ("order", "a", "b"))
 
 
 def torsion_rate(prep: Prepared, p: dict) -> np.ndarray:

@@ -10,10 +10,7 @@ from typing import Callable
 
 import numpy as np
 
-from .channels import Prepared
-
-KINEMATIC_EQ7 = ("al1", "bl1", "aw1", "bw1", "aw2", "bw2")
-KINEMATIC_EXTRA = ("ke_m1", "ke_m2", "ke_l1", "ke_l2")  # slots: <slot>_order, <slot>_a, <slot>_b
+from .channels import KINEMATIC_EQ7, KINEMATIC_EXTRA, Prepared  # noqa: F401 (the kinematic error's names, declared once there)
 
 
 def _own_parameters(effect: "Effect", p: dict, search) -> tuple[dict, list[str], list]:
