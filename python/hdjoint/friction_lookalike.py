@@ -13,7 +13,9 @@ The C++ friction law has no bristle state, so that look-alike is not fitted
 on its own. It is judged on the Stribeck fit's own structure: Stribeck is
 told apart from it only by its held-out gain where the speed is held
 (`held_speed`). Without that evidence the two are one ambiguous finding,
-each with the share of the held-out gain it can claim."""
+each with the share of the held-out gain it can claim. (A fit with omega_s
+below omega_fc never gets here: it is degenerate, effects.py's
+`_rise_inside_the_switch`; the LuGre fits above were of that kind.)"""
 from __future__ import annotations
 
 from dataclasses import dataclass
