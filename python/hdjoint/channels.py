@@ -42,8 +42,9 @@ class Prepared:
         self._smoothed: dict[int, np.ndarray] = {}
         self._aligned: tuple | None = None  # (shift, smoothed current), see _smoothed_current
         self._friction: tuple | None = None  # (law parameters, smoothed friction), see smoothed_friction
-        self._torsion_rate: tuple | None = None  # (geometry parameters, rate), see torsion_rate
+        self._torsion: tuple | None = None  # (geometry parameters, its high-pass part, its rate), see _geometric_torsion
         self._sharp: _Filter | None = None
+        self._sharp_smoothed: dict[str, np.ndarray] = {}
 
     def per_window(self, func, *arrays) -> np.ndarray:
         """func over each contiguous window on its own (state and
@@ -62,6 +63,18 @@ class Prepared:
         if name not in self._smoothed:
             self._smoothed[name] = self.kin.smooth(np.nan_to_num(x))
         return self._smoothed[name]
+
+    def sharp(self) -> _Filter:
+        """The transmission's filter (TORSION_RATE_SIGMA): the damping's rate is differentiated through it."""
+        if self._sharp is None:
+            self._sharp = _Filter(self.rec.time, TORSION_RATE_SIGMA, self.starts)
+        return self._sharp
+
+    def sharp_smoothed(self, name: str, x: np.ndarray) -> np.ndarray:
+        """A fixed signal of the recording (named) through the transmission's filter, cached."""
+        if name not in self._sharp_smoothed:
+            self._sharp_smoothed[name] = self.sharp()(np.nan_to_num(x))
+        return self._sharp_smoothed[name]
 
 # The motor and link estimates use differentiated encoders, so they see the
 # world through the kinematics' Gaussian smoothing filter: their current is smoothed the
@@ -92,28 +105,50 @@ GEOMETRY_PARAMETERS = ("N", "a0", "omega_l", "omega_w") + KINEMATIC_EQ7 + tuple(
     f"{slot}_{k}" for slot in KINEMATIC_EXTRA for k in ("order", "a", "b"))
 
 
-def torsion_rate(prep: Prepared, p: dict) -> np.ndarray:
-    """d/dt of the torsion less the kinematic error (and before the wave
-    generator's share, as the plant damps it), over the whole run. Recomputed
+def _geometric_torsion(prep: Prepared, p: dict) -> tuple[np.ndarray, np.ndarray]:
+    """The torsion less the kinematic error (and before the wave generator's
+    share, as the plant damps it), over the whole run: its part above the
+    transmission's filter, and its rate through that filter. Recomputed
     only when the geometry changes: keyed on everything, it ran the compliance
     model over the whole run for every Jacobian column of Kf, Cf, Kt, ...
     (1794 times, 32 of 57 s of a 58 s recording's diagnosis, profiled)."""
     geometry = {n: _get(p, n) for n in GEOMETRY_PARAMETERS}
     key = tuple(geometry.values())
-    if prep._torsion_rate is None or prep._torsion_rate[0] != key:
+    if prep._torsion is None or prep._torsion[0] != key:
         # The other parameters at their defaults; a rigid wave generator, no dead zone.
         geometry = parameters.for_estimator(dict(parameters.defaults(), **geometry, Kw=1e9, hys_H=0.0,
                                                  backlash=0.0, i_delay=0.0))
         rec = prep.rec
-        torsion = prep.per_window(lambda i, tm, tl: _core.compliance(geometry, i, tm, tl)["dtheta_f"],
-                                  rec.i_m, rec.theta_m, rec.theta_l)
-        if prep._sharp is None:
-            prep._sharp = _Filter(rec.time, TORSION_RATE_SIGMA, prep.starts)
-        prep._torsion_rate = (key, prep._sharp(np.nan_to_num(torsion), 1))
-    return prep._torsion_rate[1]
+        torsion = np.nan_to_num(prep.per_window(
+            lambda i, tm, tl: _core.compliance(geometry, i, tm, tl)["dtheta_f"], rec.i_m, rec.theta_m, rec.theta_l))
+        prep._torsion = (key, torsion - prep.sharp()(torsion), prep.sharp()(torsion, 1))
+    return prep._torsion[1], prep._torsion[2]
 
 
-def tau_transmission(prep: Prepared, p: dict[str, float], index: np.ndarray | None = None) -> np.ndarray:
+def torsion_rate(prep: Prepared, p: dict) -> np.ndarray:
+    """d/dt of the torsion less the kinematic error, through the transmission's filter (cached on the geometry)."""
+    return _geometric_torsion(prep, p)[1]
+
+
+def sharp_transmission(prep: Prepared) -> bool:
+    """Whether tau_T is seen through the transmission's filter: against a
+    torque sensor it is compared sample by sample, and its damping term can
+    only be seen through that filter. A cogging torque shakes the torsion at
+    6 omega_m (30-100 Hz), where the filter passes 10-70 % of the rate: the
+    damping torque lost there is periodic in the motor angle, and on the
+    independent truth's constant-speed runs the kinematic error's order 6
+    took it (1e-6 rad, p 4e-5, on a joint without one). The sensor goes
+    through the same filter (Evaluator.reference), and so does the
+    compliance model: its inputs (the torsion's high-pass part taken off
+    the link angle, and the current), which the stiffness law passes
+    linearly at that amplitude (1e-6 rad), so it runs only where the fit
+    looks. Without a sensor tau_T is the reference of parts seen through
+    the kinematics' 6 ms filter, which takes the same band away."""
+    return prep.has_sensor
+
+
+def tau_transmission(prep: Prepared, p: dict[str, float], index: np.ndarray | None = None,
+                     sharp: bool | None = None) -> np.ndarray:
     """tau_T: the compliance model over the recording (NaN where the torsion
     is singular), plus the structural damping Df when p has it.
 
@@ -126,8 +161,9 @@ def tau_transmission(prep: Prepared, p: dict[str, float], index: np.ndarray | No
     then absorbed; a time delay's corrected set failed on the next recording.)
 
     With `index`, only those samples (and only when the model is stateless
-    there: no hysteresis; otherwise the whole run, then indexed)."""
-    tau = _compliance_torque(prep, p, index)
+    there: no hysteresis; otherwise the whole run, then indexed). `sharp`:
+    through the transmission's filter (default: sharp_transmission)."""
+    tau = _compliance_torque(prep, p, index, sharp_transmission(prep) if sharp is None else sharp)
     if not _get(p, "Df"):
         return tau
     rate = torsion_rate(prep, p)
@@ -147,19 +183,23 @@ def hysteresis_torque(prep: Prepared, p: dict) -> np.ndarray:
                            delayed_current(prep, _get(p, "i_delay")), theta_m, theta_l)
 
 
-def _compliance_torque(prep: Prepared, p: dict[str, float], index: np.ndarray | None = None) -> np.ndarray:
+def _compliance_torque(prep: Prepared, p: dict[str, float], index: np.ndarray | None = None,
+                       sharp: bool = False) -> np.ndarray:
     """The estimator's compliance model (C++) at the encoders' instants, over
     the recording or at `index`: its current realigned by i_delay, no delay line."""
     if _get(p, "hys_H") > 0.0:
         z = hysteresis_torque(prep, p)
-        return _compliance_torque(prep, dict(p, hys_H=0.0), index) + (z if index is None else z[index])
+        return _compliance_torque(prep, dict(p, hys_H=0.0), index, sharp) + (z if index is None else z[index])
     rec = prep.rec
-    current = delayed_current(prep, _get(p, "i_delay"))
+    current, theta_l = delayed_current(prep, _get(p, "i_delay")), rec.theta_l
+    if sharp:
+        current = prep.sharp()(current) if _get(p, "i_delay") else prep.sharp_smoothed("i_m", current)
+        theta_l = theta_l + _geometric_torsion(prep, p)[0]  # the torsion through the filter
     native = parameters.for_estimator(dict(p, i_delay=0.0))
     if index is not None:
-        return _core.compliance(native, current[index], rec.theta_m[index], rec.theta_l[index])["tau_compliance"]
+        return _core.compliance(native, current[index], rec.theta_m[index], theta_l[index])["tau_compliance"]
     return prep.per_window(lambda i, tm, tl: _core.compliance(native, i, tm, tl)["tau_compliance"],
-                           current, rec.theta_m, rec.theta_l)
+                           current, rec.theta_m, theta_l)
 
 
 def _native(p: dict[str, float]) -> dict[str, float]:

@@ -36,7 +36,7 @@ from threadpoolctl import threadpool_limits
 
 from . import parameters
 from .calibration import RESIZE_Z, Calibrated, Prior, posterior_std, priors, robust_std, widened
-from .channels import ESTIMATES, SMOOTHED_PARTS, Prepared, depends_on
+from .channels import ESTIMATES, SMOOTHED_PARTS, Prepared, depends_on, sharp_transmission, tau_transmission
 from .current_alignment import align_current
 from .forked import map_forked
 from .motor_rest import motor_at_rest
@@ -220,6 +220,8 @@ class Evaluator:
         """The channel's reference over the whole run, through the smoothing
         filter when the part it is compared with sees the world through it."""
         reference = self.estimate(channel.reference, p)
+        if channel.part == "transmission" and channel.reference == "sensor" and sharp_transmission(self.prep):
+            return self.prep.sharp_smoothed("tau_sensor", reference)
         if channel.part in SMOOTHED_PARTS and channel.reference not in SMOOTHED_PARTS:
             if channel.reference == "sensor":
                 return self.prep.smoothed("tau_sensor", reference)
@@ -262,6 +264,19 @@ class Evaluator:
                 return self.residual(channel, p)[index]
             r = r - _finite_mean(r if compared is None else r[compared])
         return r if compared is None else np.where(compared, r, 0.0)
+
+
+def _typical_size(name: str, value: float) -> float:
+    """The fit's unit for a parameter without a prior (a hypothesis's own):
+    its size, or at zero its tolerance's absolute floor. A cogging or ripple
+    term starts at 0, where |value| gave a unit of 1e-12: the solver's
+    finite-difference step (1e-6 units) then moved cog_a by 1e-18 N.m, a
+    residual change of a few ulps, and the fit stayed at 0 on a ripple the
+    order search had found at a held-out gain of 68 % (or did not, as the
+    rounding fell)."""
+    info = parameters.table()[name]
+    floor = info.tolerance_absolute if info.calibrated() else 0.0
+    return max(abs(float(value)), floor, 1e-12)
 
 
 def _finite_mean(x: np.ndarray) -> float:
@@ -466,7 +481,7 @@ class Diagnosis:
         hi = np.array([table[n].max for n in names])
         x0 = np.clip(x0, lo, hi)
         prior_std = np.array([self.priors[n].std if n in self.priors else np.nan for n in names])
-        scale = np.where(np.isfinite(prior_std), prior_std, np.maximum(np.abs(x0), 1e-12))
+        scale = np.where(np.isfinite(prior_std), prior_std, [_typical_size(n, x) for n, x in zip(names, x0)])
         scale = np.maximum(scale, 1e-12)
         with_prior = np.flatnonzero(np.isfinite(prior_std))
         centre = np.array([self.priors[names[i]].centre for i in with_prior])
@@ -581,7 +596,14 @@ class Diagnosis:
 
     def _correlation_length(self, p) -> int:
         """Samples over which the residual stays correlated (1/e), at most the smoothing window."""
-        r = self.eval.residual(self.channels[0], p)[self.train]
+        channel = self.channels[0]
+        if channel.reference == "sensor" and sharp_transmission(self.prep):
+            # Before the transmission's filter, as the encoders and the sensor give it: the
+            # white floor it takes away is what a fit sample's weight counts (through it, the
+            # model's slow mismatch set the length, 49 samples on the paper recording, not 1).
+            r = (self.rec.tau_sensor - tau_transmission(self.prep, p, sharp=False))[self.train]
+        else:
+            r = self.eval.residual(channel, p)[self.train]
         r = r[np.isfinite(r)] - np.nanmean(r)
         if len(r) < 10:
             return 1
