@@ -20,7 +20,11 @@ def residual_over_time(ax, t, before, after, segments, title):
 def residual_vs_feature(ax, x, before, after, xlabel, bins=30):
     """Mean residual per bin of a regime variable (speed, torque...)."""
     ok = np.isfinite(x) & np.isfinite(before) & np.isfinite(after)
-    edges = np.unique(np.percentile(x[ok], np.linspace(0, 100, bins + 1)))
+    edges = np.unique(np.percentile(x[ok], np.linspace(0, 100, bins + 1))) if ok.any() else np.array([])
+    if len(edges) < 2:  # the channel compares nothing here (the motor at rest throughout), or at one value
+        ax.text(0.5, 0.5, "no samples compared over a range of it", ha="center", va="center", transform=ax.transAxes)
+        ax.set_xlabel(xlabel)
+        return ax
     centres = 0.5 * (edges[1:] + edges[:-1])
     idx = np.clip(np.searchsorted(edges, x[ok], side="right") - 1, 0, len(edges) - 2)
     for y, color, label in ((before[ok], "tab:red", "calibrated nominal"), (after[ok], "tab:blue", "corrected")):

@@ -150,3 +150,20 @@ def test_a_loop_too_low_to_explain_anything_is_not_hysteresis():
     assert not {"hysteresis", "stiffness_nonlinearity"} & {f["effect"] for f in doc["findings"]}
     hysteresis = next(h for h in doc["hypotheses_tested"][0] if h["effect"] == "hysteresis")
     assert "refitted stiffness" in hysteresis["degenerate"] and not hysteresis["accepted"]
+
+
+def test_a_recording_where_the_motor_stands_still_gets_its_report(tmp_path):
+    """The first half of joint 3's jog turns the motor 0.015 revolutions: the
+    motor channels compare nothing, and the report's regime figure took the
+    percentiles of no samples and failed (lara8_table.py stopped there).
+    The diagnosis must finish with its report and say what it cannot test."""
+    from hdjoint import parameters
+    from hdjoint.jobs import diagnose_to_directory
+    from hdjoint.recording import write_recording
+    rec = lara8_table.read_joint(DATA / "joint3_jog_linear_mass.csv")
+    first, _ = lara8_table.halves(rec)
+    write_recording(tmp_path / "still.csv", first)
+    parameters.save(tmp_path / "nominal.json", lara8_table.nominal_for(lara8_table.TOOTH_RATIO["joint3"]))
+    doc = diagnose_to_directory(str(tmp_path / "still.csv"), str(tmp_path / "nominal.json"), str(tmp_path / "out"))
+    assert (tmp_path / "out" / "report.html").stat().st_size > 10000
+    assert doc["not_testable"], doc  # and it says what standing still cannot show
