@@ -189,7 +189,8 @@ def finding_document(result, f) -> dict:
     diag, final_params = result.engine, result.params
     out = {"effect": f.effect.id, "kind": f.kind, "p_value": f.p_value, "confidence": f.confidence,
            "where": where(diag, f), "model": f.effect.model, "fit": fit_figures(diag, f)}
-    if f.kind == "resized":
+    if f.resized:
+        out["resized"] = True
         out["evidence"] = {"physics_left_out": f"{f.effect.physics}: in the nominal model, but mis-sized",
                            "z": {c.name: round(c.z, 2) for c in f.resized},
                            "test": "estimate against the prior (nominal +- tolerance); p two-sided, "
@@ -197,6 +198,15 @@ def finding_document(result, f) -> dict:
         out["parameters"] = {c.name: {k: v for k, v in c.as_dict().items() if k in ("nominal", "estimate", "lo", "hi",
                                                                                    "tolerance")}
                              for c in f.resized}
+        if f.alternatives:  # a look-alike the model lacks explains as much: "resized A, or B"
+            own = f.resize_gain.gain
+            total = own + sum(max(x.gain.gain, 0.0) for x in f.alternatives)
+            out["alternatives"] = [{"effect": f.effect.id, "physics": out["evidence"]["physics_left_out"],
+                                    "evidence_share": round(own / total, 3), "held_out_gain": round(own, 5),
+                                    "p_value": f.p_value,
+                                    "parameters": {c.name: c.estimate for c in f.resized}}] + [
+                _alternative(x, max(x.gain.gain, 0.0) / total) for x in f.alternatives]
+            out["separate_by"] = separate_by([f.effect] + [x.effect for x in f.alternatives])
         return out
     h = f.hypothesis
     out["evidence"] = {

@@ -64,8 +64,12 @@ def _interval_text(v: dict) -> str:
 
 def _finding_line(f: dict) -> str:
     head = f"<b>{html.escape(f['kind'])}</b>: {html.escape(f['effect'])} (p = {f['p_value']:.2g})"
-    if f["kind"] == "resized":
+    if f.get("resized"):
         moved = "; ".join(f"{html.escape(n)} {html.escape(_interval_text(v))}" for n, v in f["parameters"].items())
+        if f["kind"] == "ambiguous":
+            alts = " or ".join(f"{html.escape(a['effect'])} ({100 * a['evidence_share']:.0f} % of the evidence)"
+                               for a in f["alternatives"])
+            return f"{head}: one of {alts}; modelled as {html.escape(f['effect'])} resized: {moved}"
         return f"{head}: {moved}"
     intervals = f.get("intervals", {})
     values = "; ".join(
