@@ -62,7 +62,7 @@ def _diagnose(rec, params_path: Path, out: Path) -> tuple[dict, float]:
 def run_case(case: TruthCase, seed: int, duration: float) -> dict:
     joint = draw(case, seed, duration)
     row = {"case": case.name, "present": list(case.present), "seed": seed, "duration": duration,
-           "form": joint.description, "commit": _commit(), "runs": []}
+           "form": joint.description, "commit": _commit(), "engine": _engine(), "runs": []}
     with tempfile.TemporaryDirectory(prefix="hdjoint-independent-") as tmp:
         tmp = Path(tmp)
         nominal = tmp / "nominal.json"
@@ -118,20 +118,37 @@ def _machine() -> str:
     return f"{platform.node()}, {cpu}, {os.cpu_count()} cores{load}, Python {platform.python_version()}"
 
 
-def _commit() -> str:
+def _git(*args: str) -> str:
     try:
-        return subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
-                              text=True, check=True).stdout.strip()
+        return subprocess.run(["git", "-C", str(ROOT), *args], capture_output=True, text=True,
+                              check=True).stdout.strip()
     except (OSError, subprocess.CalledProcessError):
-        return "unknown"
+        return ""
+
+
+def _commit() -> str:
+    return _git("rev-parse", "--short", "HEAD") or "unknown"
+
+
+# What the diagnosis runs: a commit that touched none of these diagnosed the same way.
+ENGINE_PATHS = ("python/hdjoint", "src", "CMakeLists.txt")
+
+
+def _engine() -> str:
+    """The last commit that changed the engine (HEAD's docs-only commits do not
+    count), with '+' when the working tree changes the engine beyond it."""
+    last = _git("log", "-1", "--format=%h", "--", *ENGINE_PATHS) or "unknown"
+    return last + ("+" if _git("status", "--porcelain", "--", *ENGINE_PATHS) else "")
 
 
 def _engines(rows: list[dict]) -> str:
-    """Which commits' engines diagnosed the rows (rows written before 2026-11-23 17:30 UTC did not keep it)."""
+    """Which commits' engines diagnosed the rows: the last commit that changed the engine
+    (rows before 2026-11-24 02:00 UTC kept HEAD instead; before 2026-11-23 17:30 UTC, nothing)."""
     by_commit: dict[str, list[str]] = {}
     for r in rows:
         kind = "controls" if not r["present"] else "effects"
-        by_commit.setdefault(r.get("commit", "an earlier, unrecorded commit"), []).append(f"{kind} s{r['seed']}")
+        engine = r.get("engine") or r.get("commit", "an earlier, unrecorded commit")
+        by_commit.setdefault(engine, []).append(f"{kind} s{r['seed']}")
     return "; ".join(f"{c} ({', '.join(sorted(set(w)))})" for c, w in by_commit.items())
 
 

@@ -70,3 +70,12 @@ def test_the_first_round_keeps_every_input_of_the_acceptance_rule():
     doc = {"verdict": "consistent", "findings": [], "hypotheses_tested": [[tested]]}
     first = bench._summary(doc)["first_round"][0]
     assert first == {k: v for k, v in tested.items() if k != "not an input"}
+
+
+def test_rows_are_grouped_by_the_engine_that_diagnosed_them():
+    """A docs-only commit on top does not make another engine: rows carry the
+    last commit that changed the engine, and older rows their HEAD."""
+    rows = [dict(row("a", ["cogging"], seed=0), commit="docs1", engine="abc123"),
+            dict(row("b", ["cogging"], seed=1), commit="docs2", engine="abc123"),
+            dict(row("c", [], seed=0), commit="old999")]
+    assert bench._engines(rows) == "abc123 (effects s0, effects s1); old999 (controls s0)"
