@@ -99,8 +99,10 @@ def _summary(doc: dict) -> str:
         items.append("<p><b>This recording cannot tell:</b> " + html.escape("; ".join(
             f"{x.get('effect') or x['parameter']}: {x['why']}" for x in doc["cannot_tell"])) + ".</p>")
     advice = [f["separate_by"] for f in doc["findings"] if f.get("separate_by")]
+    # An effect a look-alike set already names has its excitation in that set's sentence.
+    in_a_set = {a["effect"] for f in doc["findings"] for a in f.get("alternatives") or []}
     advice += [f"To settle {x['effect']}, record {x['record']}." for x in doc.get("cannot_tell", [])
-               if x.get("effect") and x["record"]]
+               if x.get("effect") and x["record"] and x["effect"] not in in_a_set]
     advice += [f"To test {n['effect']}, record a motion that removes this: {n['reason']}." for n in doc["not_testable"]]
     items.append("<p><b>What to record next:</b> " + (html.escape(" ".join(advice)) if advice
                                                       else "nothing needed to settle these findings") + "</p>")

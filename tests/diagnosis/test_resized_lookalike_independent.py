@@ -27,3 +27,5 @@ def test_a_resize_a_lookalike_explains_better_is_reported_as_one_of_two(tmp_path
     assert first["confidence"] < 0.5
     page = (tmp_path / "out" / "report.html").read_text()
     assert "one of wave_generator_compliance" in page and "backlash (" in page
+    summary = page.split("Where the model and the recording differ")[0]
+    assert summary.count("a dwell at zero load") == 1  # said once, in the set's sentence
