@@ -434,6 +434,7 @@ class Diagnosis:
         self._orders_seen: list[Order] = []
         self.tested: list[list[dict]] = []  # every hypothesis tried, per round (evidence for the report)
         self.last_round: list[Hypothesis] = []  # the hypotheses of the round that ended the selection
+        self._correlation: tuple | None = None  # (parameters, length), see _correlation_length
 
     def shown_residual(self, channel: Channel, p: dict) -> np.ndarray:
         """The residual for figures, figures of merit and the search for
@@ -597,7 +598,15 @@ class Diagnosis:
         return [n for n in self.calibrated_names if n in own and n not in skip]
 
     def _correlation_length(self, p) -> int:
-        """Samples over which the residual stays correlated (1/e), at most the smoothing window."""
+        """Samples over which the residual stays correlated (1/e), at most the
+        smoothing window. Cached for the last parameter set: every hypothesis
+        of a round reads it at the round's parameters."""
+        key = tuple(sorted(p.items())) + (self.prep.current_shift,)
+        if self._correlation is None or self._correlation[0] != key:
+            self._correlation = (key, self._measure_correlation_length(p))
+        return self._correlation[1]
+
+    def _measure_correlation_length(self, p) -> int:
         channel = self.channels[0]
         if channel.reference == "sensor" and sharp_transmission(self.prep):
             # Before the transmission's filter, as the encoders and the sensor give it: the
@@ -747,6 +756,7 @@ class Diagnosis:
         while candidates:
             self.say(f"testing {len(candidates)} hypotheses ({', '.join(e.id for e in candidates)})")
             self._noise = self._null_noise(p)
+            self._correlation_length(p)  # here, once: the forked fits of the round inherit it
             tried = self._try_all(candidates, p)
             for h, adjusted in zip(tried, benjamini_hochberg([h.p_raw for h in tried])):
                 h.p_value = adjusted
