@@ -65,7 +65,8 @@ class Prepared:
         return self._smoothed[name]
 
     def sharp(self) -> _Filter:
-        """The transmission's filter (TORSION_RATE_SIGMA): the damping's rate is differentiated through it."""
+        """The transmission's filter (TORSION_RATE_SIGMA, at least 2.5 samples): the damping's rate is
+        differentiated through it."""
         if self._sharp is None:
             self._sharp = _Filter(self.rec.time, TORSION_RATE_SIGMA, self.starts)
         return self._sharp
@@ -134,7 +135,7 @@ def sharp_transmission(prep: Prepared) -> bool:
     """Whether tau_T is seen through the transmission's filter: against a
     torque sensor it is compared sample by sample, and its damping term can
     only be seen through that filter. A cogging torque shakes the torsion at
-    6 omega_m (30-100 Hz), where the filter passes 10-70 % of the rate: the
+    6 omega_m (30-100 Hz), where the filter passes 30-90 % of the rate: the
     damping torque lost there is periodic in the motor angle, and on the
     independent truth's constant-speed runs the kinematic error's order 6
     took it (1e-6 rad, p 4e-5, on a joint without one). The sensor goes

@@ -96,9 +96,9 @@ def test_the_torsion_rate_is_reused_across_non_geometric_parameters_and_stays_ex
 def test_the_damping_torque_of_a_fast_torsion_ripple_leaves_no_transmission_residual():
     """A torsion ripple at 57 Hz (a cogging order 6 at 60 rad/s of motor speed)
     is damped by Df: the sensor reads Df times its exact rate. The model's
-    rate passes through the transmission's filter (86 % at 57 Hz), and so
-    must the sensor and the compliance torque it is compared with: before
-    they did, 13 % of the damping torque stayed in the transmission channel,
+    rate passes through the transmission's filter (2.5 samples: 67 % at
+    57 Hz), and so must the sensor and the compliance torque it is compared
+    with: before they did, 33 % of the damping torque stayed in the channel,
     periodic in the motor angle, where the kinematic error's order 6 took it."""
     from hdjoint import _core, parameters
     from hdjoint.recording import Recording
