@@ -179,10 +179,15 @@ def _interval(fit_std: dict, params: dict, name: str) -> list[float] | None:
     return [params[name] - half, params[name] + half]
 
 
-def _alternative(h, share: float) -> dict:
-    return {"effect": h.effect.id, "physics": h.effect.physics, "evidence_share": round(share, 3),
-            "held_out_gain": round(h.gain.gain, 5),
-            "p_value": h.p_value, "parameters": {n: h.params_after[n] for n in _reported(h.fitted)}}
+def _alternative(effect: str, physics: str, share: float, gain: float, p_value: float, params: dict) -> dict:
+    """One member of a look-alike set, as findings.json lists it."""
+    return {"effect": effect, "physics": physics, "evidence_share": round(share, 3),
+            "held_out_gain": round(gain, 5), "p_value": p_value, "parameters": params}
+
+
+def _hypothesis_alternative(h, share: float) -> dict:
+    return _alternative(h.effect.id, h.effect.physics, share, h.gain.gain, h.p_value,
+                        {n: h.params_after[n] for n in _reported(h.fitted)})
 
 
 def finding_document(result, f) -> dict:
@@ -201,11 +206,9 @@ def finding_document(result, f) -> dict:
         if f.alternatives:  # a look-alike the model lacks explains as much: "resized A, or B"
             own = f.resize_gain.gain
             total = own + sum(max(x.gain.gain, 0.0) for x in f.alternatives)
-            out["alternatives"] = [{"effect": f.effect.id, "physics": out["evidence"]["physics_left_out"],
-                                    "evidence_share": round(own / total, 3), "held_out_gain": round(own, 5),
-                                    "p_value": f.p_value,
-                                    "parameters": {c.name: c.estimate for c in f.resized}}] + [
-                _alternative(x, max(x.gain.gain, 0.0) / total) for x in f.alternatives]
+            out["alternatives"] = [_alternative(f.effect.id, out["evidence"]["physics_left_out"], own / total, own,
+                                                f.p_value, {c.name: c.estimate for c in f.resized})] + [
+                _hypothesis_alternative(x, max(x.gain.gain, 0.0) / total) for x in f.alternatives]
             out["separate_by"] = separate_by([f.effect] + [x.effect for x in f.alternatives])
         return out
     h = f.hypothesis
@@ -231,7 +234,7 @@ def finding_document(result, f) -> dict:
     if f.kind == "ambiguous":
         hypotheses = [h] + f.alternatives
         total = sum(max(x.gain.gain, 0.0) for x in hypotheses) or 1.0
-        out["alternatives"] = [_alternative(x, max(x.gain.gain, 0.0) / total) for x in hypotheses]
+        out["alternatives"] = [_hypothesis_alternative(x, max(x.gain.gain, 0.0) / total) for x in hypotheses]
         out["separate_by"] = separate_by([x.effect for x in hypotheses])
     return out
 

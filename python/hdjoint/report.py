@@ -62,14 +62,18 @@ def _interval_text(v: dict) -> str:
             f"(nominal {_fmt(v['nominal'])} ± {_fmt(v['tolerance'])})")
 
 
+def _one_of(f: dict) -> str:
+    """A look-alike set's members with their shares of the evidence."""
+    return " or ".join(f"{html.escape(a['effect'])} ({100 * a['evidence_share']:.0f} % of the evidence)"
+                       for a in f["alternatives"])
+
+
 def _finding_line(f: dict) -> str:
     head = f"<b>{html.escape(f['kind'])}</b>: {html.escape(f['effect'])} (p = {f['p_value']:.2g})"
     if f.get("resized"):
         moved = "; ".join(f"{html.escape(n)} {html.escape(_interval_text(v))}" for n, v in f["parameters"].items())
         if f["kind"] == "ambiguous":
-            alts = " or ".join(f"{html.escape(a['effect'])} ({100 * a['evidence_share']:.0f} % of the evidence)"
-                               for a in f["alternatives"])
-            return f"{head}: one of {alts}; modelled as {html.escape(f['effect'])} resized: {moved}"
+            return f"{head}: one of {_one_of(f)}; modelled as {html.escape(f['effect'])} resized: {moved}"
         return f"{head}: {moved}"
     intervals = f.get("intervals", {})
     values = "; ".join(
@@ -77,9 +81,7 @@ def _finding_line(f: dict) -> str:
                                           if intervals.get(n) else "")
         for n, v in f["parameters"].items())
     if f["kind"] == "ambiguous":
-        alts = " or ".join(f"{html.escape(a['effect'])} ({100 * a['evidence_share']:.0f} % of the evidence)"
-                           for a in f["alternatives"])
-        return f"{head}: one of {alts}; modelled as {html.escape(f['effect'])}: {values}"
+        return f"{head}: one of {_one_of(f)}; modelled as {html.escape(f['effect'])}: {values}"
     return f"{head}: {values}"
 
 
