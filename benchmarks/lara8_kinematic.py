@@ -40,15 +40,13 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from lara8_table import DATA, JOINTS, K1, KT, TOOTH_RATIO, generated_by, halves, markdown_table, read_joint  # noqa: E402
 from lara8_torsion import regress  # noqa: E402
 
-from hdjoint import parameters  # noqa: E402
+from hdjoint import parameters, torsion_orders  # noqa: E402
 from hdjoint.signals import folds  # noqa: E402
-from hdjoint.significance import NullNoise, benjamini_hochberg, null_z, p_value  # noqa: E402
-from hdjoint.structure import held_out_gain  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 TABLE = ROOT / "docs" / "results" / "lara8_kinematic.md"
 ORDERS = (0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 6.0)  # motor orders tried; eq. (7) models 2 and 4
-MIN_REVOLUTIONS = 2.0
+MIN_REVOLUTIONS = torsion_orders.MIN_REVOLUTIONS
 FOLDS = 40  # as the diagnosis: contiguous blocks, even ones fit, odd ones held out
 NAMED_P, NAMED_GAIN, NAMED_Z = 0.05, 0.003, 3.0  # the diagnosis's acceptance rule
 
@@ -75,25 +73,9 @@ def cannot_identify(revolutions: float, order: float) -> str | None:
 
 def order_evidence(torsion, nuisances, theta_m, fold) -> list[dict]:
     """Each order of ORDERS tried on the nuisance residual: held-out gain, z, p (simulated null)."""
-    train, test = fold % 2 == 0, fold % 2 == 1
     x = np.column_stack(list(nuisances.values()))
-    coef, *_ = np.linalg.lstsq(x[train], torsion[train], rcond=None)
-    residual = torsion - x @ coef
-    noise = NullNoise(residual[None, :]).replicates([0])
-    rows = np.flatnonzero(train)
-    out = []
-    for k in ORDERS:
-        # The order's columns made orthogonal to the nuisances on the training rows: fitting
-        # them to the residual is then the joint fit (a jog's torque swings with the motor angle).
-        ripple = np.column_stack([np.cos(k * theta_m), np.sin(k * theta_m)])
-        ripple -= x @ np.linalg.lstsq(x[train], ripple[train], rcond=None)[0]
-        c, *_ = np.linalg.lstsq(ripple[train], residual[train], rcond=None)
-        gain = held_out_gain(residual, ripple @ c, fold, test)
-        z_null = null_z(noise, ripple[None, :, :], rows, fold, test)
-        out.append({"order": k, "gain": gain.gain, "z": gain.z, "p_raw": p_value(gain.z, z_null)})
-    for o, adjusted in zip(out, benjamini_hochberg([o["p_raw"] for o in out])):
-        o["p"] = adjusted
-    return out
+    return [{"order": o.order, "gain": o.gain.gain, "z": o.gain.z, "p_raw": o.p_raw, "p": o.p_value}
+            for o in torsion_orders.order_evidence(torsion, x, theta_m, ORDERS, fold, fold % 2 == 0, fold % 2 == 1)]
 
 
 def analyse(name: str, rec) -> dict:

@@ -33,19 +33,11 @@ from lara8_table import CURRENT_SIGN, DATA, K1, KT, TOOTH_RATIO, gear_ratio, gen
 from hdjoint import parameters  # noqa: E402
 from hdjoint.recording import read_recording  # noqa: E402
 from hdjoint.signals import kinematics  # noqa: E402
+from hdjoint.torsion_orders import correlation_length  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 TABLE = ROOT / "docs" / "results" / "lara8_torsion.md"
 MOTOR_ORDERS = (1, 2, 4, 6)  # the wave generator's two lobes make 2 (and its harmonics) the expected ones
-
-
-def correlation_length(r: np.ndarray) -> int:
-    """Samples over which a residual stays correlated (first drop of its autocorrelation below 1/e)."""
-    r = r - r.mean()
-    spectrum = np.fft.rfft(r, 2 * len(r))
-    acf = np.fft.irfft(spectrum * np.conj(spectrum))[: len(r)]
-    below = np.flatnonzero(acf / acf[0] < math.exp(-1))
-    return max(1, int(below[0]) if len(below) else len(r))
 
 
 def regress(columns: dict[str, np.ndarray], y: np.ndarray) -> tuple[dict, np.ndarray, int]:

@@ -42,7 +42,7 @@ class Prepared:
         self._smoothed: dict[int, np.ndarray] = {}
         self._aligned: tuple | None = None  # (shift, smoothed current), see _smoothed_current
         self._friction: tuple | None = None  # (law parameters, smoothed friction), see smoothed_friction
-        self._torsion: tuple | None = None  # (geometry parameters, its high-pass part, its rate), see _geometric_torsion
+        self._torsion: tuple | None = None  # (geometry parameters, its high-pass part, its rate, itself), see _geometric_torsion
         self._sharp: _Filter | None = None
         self._sharp_smoothed: dict[str, np.ndarray] = {}
 
@@ -122,8 +122,14 @@ def _geometric_torsion(prep: Prepared, p: dict) -> tuple[np.ndarray, np.ndarray]
         rec = prep.rec
         torsion = np.nan_to_num(prep.per_window(
             lambda i, tm, tl: _core.compliance(geometry, i, tm, tl)["dtheta_f"], rec.i_m, rec.theta_m, rec.theta_l))
-        prep._torsion = (key, torsion - prep.sharp()(torsion), prep.sharp()(torsion, 1))
+        prep._torsion = (key, torsion - prep.sharp()(torsion), prep.sharp()(torsion, 1), torsion)
     return prep._torsion[1], prep._torsion[2]
+
+
+def torsion_less_kinematic(prep: Prepared, p: dict) -> np.ndarray:
+    """The encoders' torsion theta_m/N - theta_l less the model's kinematic error (and a0), rad, whole run."""
+    _geometric_torsion(prep, p)
+    return prep._torsion[3]
 
 
 def torsion_rate(prep: Prepared, p: dict) -> np.ndarray:

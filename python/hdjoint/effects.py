@@ -65,6 +65,9 @@ class Effect:
     # held-out gain is uneven over the time folds by nature, so its evidence is
     # the pooled held-out gain against the simulated null, not the folds' z.
     lives_in_time: bool = False
+    # Without a torque sensor its orders are judged on the encoders' torsion
+    # (torsion_orders.py), not on torque channels that carry the motor and link models' mismatch.
+    seen_on_torsion: bool = False
     # (fitted parameters, torsion span of the recording in rad) -> why the fit is not this effect, or None
     degenerate: Callable[[dict, float], str | None] = lambda p, span: None
 
@@ -155,7 +158,7 @@ EFFECTS: dict[str, Effect] = {e.id: e for e in [
            revealed_by="a slow sweep of the motor over many revolutions at constant, low load",
            resizes=KINEMATIC_EQ7, order_angles=("theta_m", "theta_l"),
            slots=(("ke_m1", "theta_m"), ("ke_m2", "theta_m"), ("ke_l1", "theta_l"), ("ke_l2", "theta_l")),
-           candidates=_slots_for_orders),
+           candidates=_slots_for_orders, seen_on_torsion=True),
     Effect("wave_generator_compliance", "transmission", ("Kw", "Cw"),
            "wave generator (bearing and plug) compliance, eq. (4)", "wg(tau) with Kw, Cw",
            lambda p: p.get("Kw", 1e9) < 1e8, starts=({"Kw": 3.0, "Cw": 0.0}, {"Kw": 10.0, "Cw": 10.0},

@@ -229,8 +229,10 @@ def finding_document(result, f) -> dict:
             "share_of_held_out_samples": round(e.held_share, 3), "held_out_gain": _finite(e.gain, 4),
             "z": _finite(e.z, 2), "folds": e.folds, "share_of_the_gain": round(e.steady_share, 3),
             "tells_apart_from_smoothing": e.separates}
+    if h.seen_on:
+        out["evidence"]["seen_on"] = h.seen_on
     out["parameters"] = {n: final_params[n] for n in _reported(f.fitted)}
-    out["intervals"] = {n: _interval(diag.last_fit.std, final_params, n) for n in f.fitted}
+    out["intervals"] = h.intervals or {n: _interval(diag.last_fit.std, final_params, n) for n in f.fitted}
     if f.kind == "ambiguous":
         hypotheses = [h] + f.alternatives
         total = sum(max(x.gain.gain, 0.0) for x in hypotheses) or 1.0
