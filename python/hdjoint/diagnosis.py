@@ -737,7 +737,8 @@ class Diagnosis:
         dbic = n_eff * math.log(max(joint.mse_after, 1e-300) / max(joint.mse_before, 1e-300)) + len(names) * math.log(n_eff)
         # The part's calibrated parameters settle around it (the stiffening law turns a ripple
         # at high load into a shift of the mean torque), and then the torque views together must
-        # not predict held-out data worse: an encoder's own error at that order would make them.
+        # not predict held-out data worse, as they would for a torsion ripple the gear really
+        # transmits as torque (a cogging ripple), which the motor or link model then misses.
         # Pooled, as every hypothesis's gain pools them: on LARA8 joint 2 the motor view's held-out
         # error fell 33 % while the link view's, 117 N.m of gravity the nominal set lacks, rose 2.8 %.
         trial = self.fit(trial, self._anchors(effect.part), channels, ftol=HYPOTHESIS_FTOL).params

@@ -206,7 +206,10 @@ def build(result, doc: dict) -> str:
             if "held_out_gain" in ev:
                 runner = (f"{ev['runner_up']['effect']} (held-out gain {100 * ev['runner_up']['held_out_gain']:.2f} %)"
                           if ev["runner_up"] else "none")
-                text += (f"<p><b>Evidence:</b> held-out gain {100 * ev['held_out_gain']:.2f} % (z = {ev['z']}, "
+                seen = (f" of {html.escape(ev['seen_on'])}, the torque channels together predicting no worse with "
+                        "it (the encoders cannot tell it from an encoder's own error at that order)"
+                        if ev.get("seen_on") else "")
+                text += (f"<p><b>Evidence:</b> held-out gain {100 * ev['held_out_gain']:.2f} %{seen} (z = {ev['z']}, "
                          f"{ev['folds_improved']} folds better), p = {f['p_value']:.2g} against a simulated null, "
                          f"ΔBIC {ev['delta_bic']}, runner-up {html.escape(runner)}.</p>")
             if f.get("separate_by"):
