@@ -592,7 +592,8 @@ class Diagnosis:
             "effect": effect.id, "channel": " and ".join(c.name for c in channels), "revolutions": travel,
             "strongest": [{"angle": o.angle, "order": o.order, "amplitude": round(o.amplitude, 5),
                            "held_out_gain": round(o.gain.gain, 4), "z": round(o.gain.z, 2),
-                           "prominence": round(o.prominence, 2), "channel": o.channel} for o in strongest],
+                           "prominence": round(o.prominence, 2) if math.isfinite(o.prominence) else None,
+                           "channel": o.channel} for o in strongest],
             "reason": _why_no_order(effect, strongest[0] if strongest else None)})
 
     def _anchors(self, part: str, stateful: bool = False) -> list[str]:
