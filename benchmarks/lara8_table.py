@@ -138,8 +138,8 @@ def halves(rec):
 
 
 # The parameter files examples/lara8 ships (no kinematic-error model: eq. (7) all zero), per joint.
-EXAMPLES = {"joint1": ROOT / "examples/lara8/joint12_params.json", "joint2": ROOT / "examples/lara8/joint12_params.json",
-            "joint3": ROOT / "examples/lara8/joint3_params.json"}
+EXAMPLES = {joint: ROOT / "examples/lara8" / f"{name}_params.json"
+            for joint, name in (("joint1", "joint12"), ("joint2", "joint12"), ("joint3", "joint3"))}
 
 
 def _diagnose(rec, n: float, tmp: Path, name: str, nominal: dict | None = None) -> dict:

@@ -63,7 +63,8 @@ def run(job: tuple[str, int, int]) -> dict:
 
 def jobs() -> list[tuple[str, int, int]]:
     controls = [(c.name, s, i) for s in range(4) for c in CONTROL_CASES for i in range(2)]
-    effects = [(c.name, s, 0) for s in range(3) for c in EFFECT_CASES if c.present in (("kinematic_error",), ("cogging",))]
+    effects = [(c.name, s, 0) for s in range(3) for c in EFFECT_CASES
+               if c.present in (("kinematic_error",), ("cogging",))]
     return controls + effects
 
 

@@ -115,6 +115,11 @@ def check_recording(rec: Recording) -> None:
 TORSION_VIEW = "the encoders' torsion (no torque sensor)"
 
 
+def delta_bic(n_eff: float, mse_before: float, mse_after: float, added: int) -> float:
+    """BIC with `added` parameters less BIC without, over n_eff independent training samples."""
+    return n_eff * math.log(max(mse_after, 1e-300) / max(mse_before, 1e-300)) + added * math.log(n_eff)
+
+
 def eq7_orders(p: dict) -> dict[str, tuple[float, ...]]:
     """The angle orders eq. (7) already models in `p`: only those whose
     coefficients are nonzero. A nominal set without a kinematic-error model
@@ -310,7 +315,8 @@ class Hypothesis:
     gain: HeldOutGain
     delta_bic: float
     orders: list[Order] = field(default_factory=list)
-    worst_channel_ratio: float = 1.0  # largest held-out MSE after/before over the effect's channels (pooled over them when seen_on the torsion)
+    # Largest held-out MSE after/before over the effect's channels (pooled over them when seen_on the torsion).
+    worst_channel_ratio: float = 1.0
     degenerate: str | None = None  # why the fit is not the effect it stands for (Effect.degenerate)
     p_raw: float = 1.0
     p_value: float = 1.0  # Benjamini-Hochberg adjusted over the round
@@ -674,8 +680,7 @@ class Diagnosis:
         worst = max(float(np.nanmean(a[self.test]) / max(np.nanmean(b[self.test]), 1e-300))
                     for b, a in zip(per_before, per_after))
         n_eff = np.count_nonzero(self.train) / self._correlation_length(p)
-        mse_b, mse_a = np.mean(before[self.train]), np.mean(after[self.train])
-        dbic = n_eff * math.log(max(mse_a, 1e-300) / max(mse_b, 1e-300)) + len(names) * math.log(n_eff)
+        dbic = delta_bic(n_eff, np.mean(before[self.train]), np.mean(after[self.train]), len(names))
         hypothesis = Hypothesis(effect, p, fit.params, names, gain, float(dbic), orders, worst_channel_ratio=worst,
                                 degenerate=effect.degenerate(fit.params, self._torsion_span(p)))
         # The simulated null: the same test on noise with the residual's colour,
@@ -735,7 +740,7 @@ class Diagnosis:
             intervals.update({f"{slot}_a": [a - o.half_width, a + o.half_width],
                               f"{slot}_b": [b - o.half_width, b + o.half_width]})
         n_eff = np.count_nonzero(self.train) / joint.correlation
-        dbic = n_eff * math.log(max(joint.mse_after, 1e-300) / max(joint.mse_before, 1e-300)) + len(names) * math.log(n_eff)
+        dbic = delta_bic(n_eff, joint.mse_before, joint.mse_after, len(names))
         # The part's calibrated parameters settle around it (the stiffening law turns a ripple
         # at high load into a shift of the mean torque), and then the torque views together must
         # not predict held-out data worse, as they would for a torsion ripple the gear really

@@ -61,22 +61,33 @@ def nuisances(torque: np.ndarray, theta_l: np.ndarray) -> np.ndarray:
     return np.column_stack([np.ones_like(torque), torque, theta_l - np.mean(theta_l)])
 
 
+def _nuisance_residual(torsion, nuisance, train, test):
+    """The torsion less its nuisances fitted on the training rows (0 outside
+    the compared rows), and the training and held-out rows where it is finite."""
+    train, test = train & np.isfinite(torsion), test & np.isfinite(torsion)
+    y = np.nan_to_num(torsion)
+    coef = np.linalg.lstsq(nuisance[train], y[train], rcond=None)[0]
+    return np.where(train | test, y - nuisance @ coef, 0.0), train, test
+
+
+def _ripple(nuisance, terms, train) -> np.ndarray:
+    """cos, sin of each (angle values, order), made orthogonal to the nuisances on
+    the training rows: fitting them to the nuisance residual is then the joint
+    fit (a jog's torque swings with the angle)."""
+    ripple = np.column_stack([f(k * values) for values, k in terms for f in (np.cos, np.sin)])
+    return ripple - nuisance @ np.linalg.lstsq(nuisance[train], ripple[train], rcond=None)[0]
+
+
 def order_evidence(torsion: np.ndarray, nuisance: np.ndarray, angle: np.ndarray, orders, fold: np.ndarray,
                    train: np.ndarray, test: np.ndarray, angle_name: str = "theta_m") -> list[TorsionOrder]:
     """Each order of `angle` tried on the torsion's nuisance residual: held-out
     gain and z over the folds, p from the simulated null, BH-adjusted p."""
-    train, test = train & np.isfinite(torsion), test & np.isfinite(torsion)
-    y = np.nan_to_num(torsion)
-    coef = np.linalg.lstsq(nuisance[train], y[train], rcond=None)[0]
-    residual = np.where(train | test, y - nuisance @ coef, 0.0)
+    residual, train, test = _nuisance_residual(torsion, nuisance, train, test)
     noise = NullNoise(residual[None, :]).replicates([0])
     rows = np.flatnonzero(train)
     out = []
     for k in orders:
-        # The order's columns made orthogonal to the nuisances on the training rows:
-        # fitting them to the residual is then the joint fit (a jog's torque swings with the angle).
-        ripple = np.column_stack([np.cos(k * angle), np.sin(k * angle)])
-        ripple -= nuisance @ np.linalg.lstsq(nuisance[train], ripple[train], rcond=None)[0]
+        ripple = _ripple(nuisance, [(angle, k)], train)
         c = np.linalg.lstsq(ripple[train], residual[train], rcond=None)[0]
         left = residual[train] - ripple[train] @ c
         dof = max(len(rows) - nuisance.shape[1] - 2, 1)
@@ -104,12 +115,8 @@ class JointFit:
 def fit_orders(torsion: np.ndarray, nuisance: np.ndarray, terms: list[tuple[np.ndarray, float]], fold: np.ndarray,
                train: np.ndarray, test: np.ndarray) -> JointFit:
     """The orders `terms` ((angle values, order) each) fitted jointly with the nuisances."""
-    train, test = train & np.isfinite(torsion), test & np.isfinite(torsion)
-    y = np.nan_to_num(torsion)
-    coef = np.linalg.lstsq(nuisance[train], y[train], rcond=None)[0]
-    residual = np.where(train | test, y - nuisance @ coef, 0.0)
-    ripple = np.column_stack([f(k * values) for values, k in terms for f in (np.cos, np.sin)])
-    ripple -= nuisance @ np.linalg.lstsq(nuisance[train], ripple[train], rcond=None)[0]
+    residual, train, test = _nuisance_residual(torsion, nuisance, train, test)
+    ripple = _ripple(nuisance, terms, train)
     c = np.linalg.lstsq(ripple[train], residual[train], rcond=None)[0]
     after = residual[train] - ripple[train] @ c
     return JointFit([(float(c[2 * i]), float(c[2 * i + 1])) for i in range(len(terms))],
