@@ -112,6 +112,10 @@ def test_a_residual_the_simulated_null_cannot_judge_is_not_called_consistent():
     assert doc["verdict"] == "unexplained"
     said = [u for u in doc["unexplained"] if "gravity_load" in u["feature"]]
     assert [u["channel"] for u in said] == ["link vs transmission"] and said[0]["p_value"] == gravity["p_value"]
+    # Judged on the encoders' torsion, the kinematic error's note has no spectrum prominence (null, not NaN).
+    kinematic = next(n for n in doc["orders_not_found"] if n["effect"] == "kinematic_error")
+    assert kinematic["reason"].startswith("on the encoders' torsion")
+    assert all(o["prominence"] is None for o in kinematic["strongest"])
 
 
 def test_a_ripple_over_few_revolutions_stands_out_of_its_off_orders():
