@@ -9,9 +9,11 @@ other hypothesis to share a Benjamini-Hochberg correction with, so a false
 alarm here is at least as likely as in a whole diagnosis).
   - controls (nothing missing, seeds 0-3, both recordings of each: 40 runs):
     any accepted kinematic error is a false alarm;
-  - the kinematic error case (seeds 0-2, first recording): its extra
-    orders should be found; and the cogging case, a ripple at motor orders in
-    the torque, not in the geometry: a kinematic error there is a wrong name.
+  - the kinematic error case (seeds 0-9, first recording): its extra
+    orders should be found (seeds 3 and 6-9 draw motor orders 3 and 5, the
+    others link order 2 and motor order 4); and the cogging case, a ripple at
+    motor orders in the torque, not in the geometry: a kinematic error there
+    is a wrong name.
 Run: python benchmarks/torsion_view.py [--workers 2]
 writes docs/results/torsion_view.md (and .jsonl, the raw rows)."""
 from __future__ import annotations
@@ -63,7 +65,7 @@ def run(job: tuple[str, int, int]) -> dict:
 
 def jobs() -> list[tuple[str, int, int]]:
     controls = [(c.name, s, i) for s in range(4) for c in CONTROL_CASES for i in range(2)]
-    effects = [(c.name, s, 0) for s in range(3) for c in EFFECT_CASES
+    effects = [(c.name, s, 0) for s in range(10) for c in EFFECT_CASES
                if c.present in (("kinematic_error",), ("cogging",))]
     return controls + effects
 
