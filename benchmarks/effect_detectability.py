@@ -116,7 +116,7 @@ def oracle_test(case, seed: int, duration: float, effect_id: str | None = None) 
                          candidates=lambda e, q, search: (dict(q, **values), fitted, []))
         h = diag.test_alone(effect, p)
     return dict(row, held_out_gain=round(h.gain.gain, 5), z=round(h.evidence_z(), 2), p_value=h.p_raw,
-                delta_bic=round(h.delta_bic, 1), worst_channel_ratio=round(h.worst_channel_ratio, 3),
+                delta_bic=round(h.delta_bic, 1), worst_channel_ratio=round(h.channel_ratio(), 3),
                 degenerate=h.degenerate, fitted={n: h.params_after[n] for n in values},
                 verdict="detectable" if h.accepted() else "not detectable")
 

@@ -53,7 +53,7 @@ def run(job: tuple[str, int, int]) -> dict:
            "seconds": round(time.perf_counter() - started, 1), "accepted": bool(h and h.accepted())}
     if h is not None:
         row.update(p=h.p_value, held_out_gain=round(h.gain.gain, 4), z=round(h.gain.z, 2),
-                   pooled_ratio=round(h.worst_channel_ratio, 4),
+                   pooled_ratio=round(h.channel_ratio(), 4),
                    orders=[{"angle": o.angle, "order": o.order, "amplitude": o.amplitude} for o in h.orders])
     else:
         row["why_not"] = (diag.orders_not_found or diag.not_testable or [{"reason": "no channel"}])[-1].get("reason")

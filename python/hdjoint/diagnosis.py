@@ -42,7 +42,8 @@ from .current_alignment import align_current
 from .forked import map_forked
 from .motor_rest import motor_at_rest
 from .friction_lookalike import SMOOTHING_LOOKALIKE, SteadyEvidence, held_speed, steady_evidence
-from .effects import ALWAYS_CALIBRATED, EFFECTS, Effect, calibrated_parameters, orthogonal_parameters, owner, testable
+from .effects import (ALWAYS_CALIBRATED, EFFECTS, Effect, calibrated_parameters, fill_slots, orthogonal_parameters, owner,
+                      slot_on, testable)
 from .recording import Recording
 from .significance import FALSE_DISCOVERY_RATE, NullNoise, benjamini_hochberg, null_gain, null_z, p_value, standardised
 from .signals import folds as make_folds, kinematics, sample_windows, window_labels
@@ -315,8 +316,10 @@ class Hypothesis:
     gain: HeldOutGain
     delta_bic: float
     orders: list[Order] = field(default_factory=list)
-    # Largest held-out MSE after/before over the effect's channels (pooled over them when seen_on the torsion).
+    # Largest held-out MSE after/before over the effect's channels; for a hypothesis seen on the torsion,
+    # the channels' pooled held-out MSE after/before instead (pooled_ratio), as its gain is not theirs.
     worst_channel_ratio: float = 1.0
+    pooled_ratio: float | None = None
     degenerate: str | None = None  # why the fit is not the effect it stands for (Effect.degenerate)
     p_raw: float = 1.0
     p_value: float = 1.0  # Benjamini-Hochberg adjusted over the round
@@ -347,7 +350,11 @@ class Hypothesis:
 
     def _held_out_evidence(self) -> bool:
         return (not self.degenerate and self.gain.gain > 0.003 and self._steady_over_folds() and self.delta_bic < -10.0
-                and self.worst_channel_ratio <= 1.0)
+                and self.channel_ratio() <= 1.0)
+
+    def channel_ratio(self) -> float:
+        """What the torque channels do held out with it: the worst one's ratio, or their pooled one."""
+        return self.worst_channel_ratio if self.pooled_ratio is None else self.pooled_ratio
 
     def _steady_over_folds(self) -> bool:
         """A stationary effect helps most held-out folds, by z > 3 over them. A
@@ -706,26 +713,22 @@ class Diagnosis:
         motor-side mismatch and 115 N.m of gravity the 4 s jog cannot confirm."""
         torsion = torsion_less_kinematic(self.prep, p)
         nuisance = torsion_nuisances(np.nan_to_num(self.reference_torque(p)), self.rec.theta_l)
-        def on(slot):
-            return bool(p.get(f"{slot}_a", 0.0) or p.get(f"{slot}_b", 0.0))
-        free = {a: [s for s, angle in effect.slots if angle == a and not on(s)] for a in effect.order_angles}
+        free = {a for s, a in effect.slots if not slot_on(p, s)}
         modelled = {a: eq7_orders(p).get(a, ()) + tuple(p[f"{s}_order"] for s, angle in effect.slots
-                                                         if angle == a and on(s)) for a in effect.order_angles}
+                                                         if angle == a and slot_on(p, s)) for a in effect.order_angles}
         tried = []
         for angle in effect.order_angles:
             values = getattr(self.rec, angle)
-            if not free[angle] or (angle == "theta_m" and np.ptp(values) < MIN_REVOLUTIONS * 2 * math.pi):
+            if angle not in free or (angle == "theta_m" and np.ptp(values) < MIN_REVOLUTIONS * 2 * math.pi):
                 continue
             orders = [k for k in candidate_orders(angle, np.ptp(values))
                       if all(abs(k - e) > 1e-9 for e in modelled[angle])]
             tried += order_evidence(torsion, nuisance, values, orders, self.fold, self.train, self.test, angle)
         for o, adjusted in zip(tried, benjamini_hochberg([o.p_raw for o in tried])):
             o.p_value = adjusted
-        chosen = []
-        for o in sorted(tried, key=lambda o: -o.gain.gain):
-            if o.p_value <= FALSE_DISCOVERY_RATE and o.gain.gain > 0.003 and o.gain.z > 3.0 and free[o.angle]:
-                chosen.append((free[o.angle].pop(0), o))
-        chosen = chosen[:2]
+        passing = [o for o in sorted(tried, key=lambda o: -o.gain.gain)
+                   if o.p_value <= FALSE_DISCOVERY_RATE and o.gain.gain > 0.003 and o.gain.z > 3.0]
+        trial, names, chosen = fill_slots(effect, p, passing, limit=2)
         if not chosen:
             self._orders_seen = [Order(o.angle, o.order, o.amplitude, o.gain, float("nan"), TORSION_VIEW)
                                  for o in tried]
@@ -733,10 +736,9 @@ class Diagnosis:
             return None
         joint = fit_orders(torsion, nuisance, [(getattr(self.rec, o.angle), o.order) for _, o in chosen],
                            self.fold, self.train, self.test)
-        trial, names, intervals = dict(p), [], {}
+        intervals = {}
         for (slot, o), (a, b) in zip(chosen, joint.coefficients):
-            trial.update({f"{slot}_order": o.order, f"{slot}_a": a, f"{slot}_b": b})
-            names += [f"{slot}_a", f"{slot}_b"]
+            trial.update({f"{slot}_a": a, f"{slot}_b": b})
             intervals.update({f"{slot}_a": [a - o.half_width, a + o.half_width],
                               f"{slot}_b": [b - o.half_width, b + o.half_width]})
         n_eff = np.count_nonzero(self.train) / joint.correlation
@@ -751,7 +753,7 @@ class Diagnosis:
         pooled = float(np.nanmean(self._squared(trial, channels)[self.test]) /
                        max(np.nanmean(self._squared(p, channels)[self.test]), 1e-300))
         orders = [Order(o.angle, o.order, o.amplitude, o.gain, float("nan"), TORSION_VIEW) for _, o in chosen]
-        return Hypothesis(effect, p, trial, names, joint.gain, float(dbic), orders, worst_channel_ratio=pooled,
+        return Hypothesis(effect, p, trial, names, joint.gain, float(dbic), orders, pooled_ratio=pooled,
                           p_raw=min(o.p_value for _, o in chosen), seen_on=TORSION_VIEW, intervals=intervals)
 
     def _torsion_span(self, p: dict) -> float:
@@ -840,7 +842,8 @@ class Diagnosis:
             self.tested.append([{"effect": h.effect.id, "held_out_gain": round(h.gain.gain, 5),
                                  "z": round(h.gain.z, 2), "p_value": h.p_value, "delta_bic": round(h.delta_bic, 1),
                                  "folds_improved": f"{h.gain.folds_improved}/{h.gain.folds_compared}",
-                                 "worst_channel_ratio": round(h.worst_channel_ratio, 4),
+                                 **({"pooled_channel_ratio": round(h.pooled_ratio, 4)} if h.seen_on else
+                                    {"worst_channel_ratio": round(h.worst_channel_ratio, 4)}),
                                  "accepted": h.accepted(), **({"degenerate": h.degenerate} if h.degenerate else {}),
                                  **({"seen_on": h.seen_on, "orders": [{"angle": o.angle, "order": o.order}
                                                                       for o in h.orders]} if h.seen_on else {}),

@@ -18,21 +18,36 @@ def _own_parameters(effect: "Effect", p: dict, search) -> tuple[dict, list[str],
     return p, list(effect.params), []
 
 
-def _slots_for_orders(effect: "Effect", p: dict, search) -> tuple[dict, list[str], list]:
-    """A candidate whose terms sit at angle orders: the order search
-    (`search(p, angles)`, strongest first) picks them, each fills a free slot
-    of the effect's `slots` (prefix -> angle): <slot>_order, <slot>_a, <slot>_b."""
-    orders = search(p, effect.order_angles)
-    free = {angle: [slot for slot, a in effect.slots if a == angle] for angle in effect.order_angles}
+def slot_on(p: dict, slot: str) -> bool:
+    """The set already carries the term in `slot` (<slot>_a or <slot>_b nonzero)."""
+    return bool(p.get(f"{slot}_a", 0.0) or p.get(f"{slot}_b", 0.0))
+
+
+def fill_slots(effect: "Effect", p: dict, orders, limit: int | None = None) -> tuple[dict, list[str], list]:
+    """Each order (strongest first) fills a free slot of the effect's `slots`
+    (prefix -> angle) at its angle, up to `limit` orders: the set with
+    <slot>_order written, the <slot>_a, <slot>_b names to fit, and the
+    (slot, order) pairs used. An order whose angle has no free slot is skipped."""
+    free = {angle: [slot for slot, a in effect.slots if a == angle and not slot_on(p, slot)]
+            for angle in effect.order_angles}
     trial, names, used = dict(p), [], []
     for o in orders:
+        if limit is not None and len(used) >= limit:
+            break
         if not free[o.angle]:
             continue
         slot = free[o.angle].pop(0)
         trial[f"{slot}_order"] = o.order
         names += [f"{slot}_a", f"{slot}_b"]
-        used.append(o)
+        used.append((slot, o))
     return trial, names, used
+
+
+def _slots_for_orders(effect: "Effect", p: dict, search) -> tuple[dict, list[str], list]:
+    """A candidate whose terms sit at angle orders: the order search
+    (`search(p, angles)`, strongest first) picks them, each in a free slot."""
+    trial, names, used = fill_slots(effect, p, search(p, effect.order_angles))
+    return trial, names, [o for _, o in used]
 
 
 @dataclass(frozen=True)

@@ -29,5 +29,5 @@ def test_a_transmitted_ripple_is_not_named_a_kinematic_error_from_the_torsion():
         h = diag.test_alone(EFFECTS["kinematic_error"], p)
     assert h is not None and h.seen_on == TORSION_VIEW  # judged on the torsion, not the torque channels
     assert h.p_value <= 0.05 and h.gain.z > 3.0          # it passes there ...
-    assert h.worst_channel_ratio > 1.0                   # ... but the torque channels get worse with it
+    assert h.pooled_ratio > 1.0                   # ... but the torque channels get worse with it
     assert not h.accepted()
