@@ -93,6 +93,9 @@ def test_the_two_lobe_error_a_nominal_set_lacks_is_added_from_the_encoders_torsi
         lo, hi = kinematic["intervals"][name]
         assert lo < p[name] < hi and hi - lo < 4e-5
     assert "encoders&#x27; torsion" in (tmp_path / "out" / "report.html").read_text()
+    # Its record says what the torque channels did with it: their pooled ratio, not a worst channel's.
+    tested = next(h for rnd in doc["hypotheses_tested"] for h in rnd if h.get("seen_on"))
+    assert tested["pooled_channel_ratio"] <= 1.0 and "worst_channel_ratio" not in tested
 
 
 @pytest.mark.slow
