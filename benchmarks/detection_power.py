@@ -52,14 +52,7 @@ def run(effect: str, size: float, seed: int) -> dict:
 
 
 def load() -> list[dict]:
-    if not RESULTS.exists():
-        return []
-    rows = {}
-    for line in RESULTS.read_text().splitlines():
-        if line.strip():
-            r = json.loads(line)
-            rows.setdefault((r["effect"], r["size"], r["seed"]), r)
-    return list(rows.values())
+    return independent.load_results(RESULTS, ("effect", "size", "seed"))
 
 
 def _said(r: dict) -> str:

@@ -81,15 +81,16 @@ def run_case(case: TruthCase, seed: int, duration: float) -> dict:
     return row
 
 
-def load_results(path: Path = RESULTS) -> list[dict]:
-    """Every case-seed's row, the first one where parts run side by side did one twice."""
+def load_results(path: Path = RESULTS, key: tuple[str, ...] = ("case", "seed", "duration")) -> list[dict]:
+    """Every row of a JSON-lines results file, one per `key`: the first one
+    where parts run side by side did one twice."""
     if not path.exists():
         return []
     rows = {}
     for line in path.read_text().splitlines():
         if line.strip():
             row = json.loads(line)
-            rows.setdefault((row["case"], row["seed"], row["duration"]), row)
+            rows.setdefault(tuple(row[k] for k in key), row)
     return list(rows.values())
 
 
