@@ -47,7 +47,7 @@ from .effects import (ALWAYS_CALIBRATED, EFFECTS, Effect, calibrated_parameters,
 from .recording import Recording
 from .significance import FALSE_DISCOVERY_RATE, NullNoise, benjamini_hochberg, null_gain, null_z, p_value, standardised
 from .signals import folds as make_folds, kinematics, sample_windows, window_labels
-from .structure import HeldOutGain, Order, candidate_orders, fold_z, held_out_gain_sq, order_search
+from .structure import DOMINANT_GAIN, HeldOutGain, Order, candidate_orders, fold_z, held_out_gain_sq, order_search
 from .timebase import GAP_FACTOR
 from .torsion_orders import MIN_REVOLUTIONS, fit_orders, nuisances as torsion_nuisances, order_evidence
 
@@ -961,7 +961,8 @@ def _why_no_order(effect: Effect, strongest: Order | None) -> str:
                 f"> 0.3 %, z > 3, p <= {FALSE_DISCOVERY_RATE:g} after Benjamini-Hochberg over the orders); the "
                 f"strongest, {strongest.angle} order {strongest.order:g}, has z = {strongest.gain.z:.1f}")
     why = ("no order of " + " or ".join(effect.order_angles) + " has a significant held-out gain (z > 3, "
-           "gain > 0.5 %) standing out of the spectrum (prominence > 3)")
+           f"gain > 0.5 %) standing out of the spectrum (prominence > 3) or explaining over "
+           f"{100 * DOMINANT_GAIN:.0f} % of the held-out residual")
     if strongest is None:
         return why + "; the angles cover too few periods for any order"
     head = f"; the strongest, {strongest.angle} order {strongest.order:g} (z = {strongest.gain.z:.1f}),"

@@ -96,3 +96,24 @@ def test_a_strong_ripple_stands_out_of_its_own_leakage():
 
 def test_no_fold_compared_is_no_evidence():
     assert fold_z(np.array([np.nan, np.nan, np.nan])) == 0.0
+
+
+def test_a_ripple_that_explains_most_of_the_residual_counts_over_a_broadband_floor():
+    """Cogging seen through a lag beside the lag's own broadband residual: the
+    off-orders carry power (prominence under 3), but the order alone explains
+    most of the held-out residual. A weaker order over the same floor does not count."""
+    rng = np.random.default_rng(7)
+    fold, test, _ = _layout()
+    theta = _sweep_angle(N)
+    # Structure spread over the angle's spectrum beside order 8 (where its off-orders lie), at no order of the grid.
+    spread = np.concatenate([rng.uniform(7.6, 7.85, 60), rng.uniform(8.15, 8.4, 60)])
+    broadband = sum(np.cos(k * theta + rng.uniform(0, 2 * np.pi)) for k in spread)
+    broadband *= 0.1 / np.std(broadband)
+    orders = [k / 2 for k in range(1, 25)]
+    strong = order_search(theta, 0.1 * np.cos(8.0 * theta) + broadband, fold, ~test, test, orders, seen=(seen := []))
+    at8 = next(o for o in seen if o.order == 8.0)
+    assert at8.prominence <= 3.0 and at8.gain.gain > 0.3  # the broadband floor hides it from the prominence ...
+    assert [o.order for o in strong][:1] == [8.0]           # ... not from its share of the residual
+    weak = order_search(theta, 0.02 * np.cos(8.0 * theta) + broadband, fold, ~test, test, orders, seen=(seen := []))
+    at8 = next(o for o in seen if o.order == 8.0)
+    assert at8.gain.gain < 0.3 and 8.0 not in [o.order for o in weak if o.prominence <= 3.0]
