@@ -144,6 +144,15 @@ def _effect_of(row: dict) -> str:
     return row.get("effect") or next(c.present[0] for c in EFFECT_CASES if c.name == row["case"])
 
 
+def _row(r: dict, effect: str | None = None) -> str:
+    """One oracle result as a table row (with the effect not named, in a case of several)."""
+    gain = f"{100 * r['held_out_gain']:.2f} %" if "held_out_gain" in r else "-"
+    p = f"{r['p_value']:.2g}" if "p_value" in r else "-"
+    which = f" {effect} |" if effect else ""
+    return (f"| {r['case']} | {r['seed']} | {r['excitation']} |{which} {r['said']} | {gain} | {r.get('z', '-')} | "
+            f"{p} | {r['verdict']}{' (' + r['degenerate'] + ')' if r.get('degenerate') else ''} |")
+
+
 def write_table(results: list[dict], misses_total: int) -> str:
     several = [r for r in results if r.get("others_at_truth")]
     results = [r for r in results if not r.get("others_at_truth")]
@@ -163,12 +172,7 @@ def write_table(results: list[dict], misses_total: int) -> str:
              f"{misses_total - len(found) - len(hidden)} without counterpart values in the model.", "",
              "| case | seed | excitation | diagnosis said | oracle held-out gain | z | p | verdict |",
              "|---|---|---|---|---|---|---|---|"]
-    for r in sorted(results, key=lambda r: (r["case"], r["seed"])):
-        gain = f"{100 * r['held_out_gain']:.2f} %" if "held_out_gain" in r else "-"
-        z = r.get("z", "-")
-        p = f"{r['p_value']:.2g}" if "p_value" in r else "-"
-        lines.append(f"| {r['case']} | {r['seed']} | {r['excitation']} | {r['said']} | {gain} | {z} | {p} | "
-                     f"{r['verdict']}{' (' + r['degenerate'] + ')' if r.get('degenerate') else ''} |")
+    lines += [_row(r) for r in sorted(results, key=lambda r: (r["case"], r["seed"]))]
     if several:
         lines += ["", "## Several effects: each one not named, the others modelled at the truth's values", "",
                   f"Of {len(several)} effects not named in cases of several: "
@@ -176,10 +180,7 @@ def write_table(results: list[dict], misses_total: int) -> str:
                   f"**{sum(r['verdict'] == 'not detectable' for r in several)} not detectable**.", "",
                   "| case | seed | excitation | effect not named | diagnosis said | oracle held-out gain | z | p | "
                   "verdict |", "|---|---|---|---|---|---|---|---|---|"]
-        for r in sorted(several, key=lambda r: (r["case"], r["seed"], r["effect"])):
-            lines.append(f"| {r['case']} | {r['seed']} | {r['excitation']} | {r['effect']} | {r['said']} | "
-                         f"{100 * r['held_out_gain']:.2f} % | {r['z']} | {r['p_value']:.2g} | {r['verdict']}"
-                         f"{' (' + r['degenerate'] + ')' if r.get('degenerate') else ''} |")
+        lines += [_row(r, r["effect"]) for r in sorted(several, key=lambda r: (r["case"], r["seed"], r["effect"]))]
     text = "\n".join(lines) + "\n"
     TABLE.write_text(text)
     return text
