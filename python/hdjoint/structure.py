@@ -173,7 +173,7 @@ def _floor_coefficients(angle, order, through, residual, rows):
 # motor residual at 1.77 times its off-orders: the lag's broadband residual,
 # not the ripple's, raised the floor. On the benchmark's 91 recordings no
 # significant order under the prominence gate that the truth lacks got above
-# 15 % (docs/diagnosis.md, "Error rates"); no control has a significant order.
+# 15 %, and no control has a significant order (docs/results/order_gate_scan.md).
 DOMINANT_GAIN = 0.30
 
 # Off-orders giving an order's floor: a quarter order beside it, where the
