@@ -12,6 +12,7 @@ Called by diagnosis_suite.py --independent."""
 from __future__ import annotations
 
 import json
+import multiprocessing
 import os
 import platform
 import subprocess
@@ -92,6 +93,20 @@ def load_results(path: Path = RESULTS, key: tuple[str, ...] = ("case", "seed", "
             row = json.loads(line)
             rows.setdefault(tuple(row[k] for k in key), row)
     return list(rows.values())
+
+
+def run_pending(jobs: list[tuple], work, path: Path, key: tuple[str, ...], workers: int, describe) -> list[dict]:
+    """Run `work` on each job (a tuple of the row's `key` values) not yet in
+    `path`, on `workers` processes, appending each row as it comes (so a run
+    can be stopped and resumed); returns every row."""
+    done = {tuple(r[k] for k in key) for r in load_results(path, key)}
+    todo = [job for job in jobs if tuple(job) not in done]
+    with multiprocessing.get_context("fork").Pool(workers) as pool:
+        for row in pool.imap_unordered(work, todo):
+            with path.open("a") as f:
+                f.write(json.dumps(row) + "\n")
+            print(describe(row), flush=True)
+    return load_results(path, key)
 
 
 def run(seeds: list[int], duration: float, only: str | None, which: str, path: Path = RESULTS) -> None:

@@ -16,8 +16,6 @@ writes docs/results/order_gate_scan.md (and .jsonl, one line per recording)."""
 from __future__ import annotations
 
 import argparse
-import json
-import multiprocessing
 import time
 
 from threadpoolctl import threadpool_limits
@@ -105,15 +103,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args()
-    done = independent.load_results(RESULTS, ("case", "seed", "recording"))
-    todo = [j for j in jobs() if j not in {(r["case"], r["seed"], r["recording"]) for r in done}]
-    with multiprocessing.get_context("fork").Pool(args.workers) as pool:
-        for row in pool.imap_unordered(scan, todo):
-            with RESULTS.open("a") as f:
-                f.write(json.dumps(row) + "\n")
-            print(row["case"], row["seed"], row["recording"], len(row["significant"]), flush=True)
-    print(write_table(independent.load_results(RESULTS, ("case", "seed", "recording"))))
-
+    rows = independent.run_pending(jobs(), scan, RESULTS, ("case", "seed", "recording"), args.workers,
+                                   lambda r: f"{r['case']} {r['seed']} {r['recording']} {len(r['significant'])}")
+    print(write_table(rows))
 
 if __name__ == "__main__":
     main()

@@ -19,8 +19,6 @@ writes docs/results/torsion_view.md (and .jsonl, the raw rows)."""
 from __future__ import annotations
 
 import argparse
-import json
-import multiprocessing
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -110,17 +108,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args()
-    done = [json.loads(line) for line in RESULTS.read_text().splitlines()] if RESULTS.exists() else []
-    seen = {(r["case"], r["seed"], r["recording"]) for r in done}
-    todo = [j for j in jobs() if j not in seen]
-    with multiprocessing.get_context("fork").Pool(args.workers) as pool:
-        for row in pool.imap_unordered(run, todo):
-            with RESULTS.open("a") as f:
-                f.write(json.dumps(row) + "\n")
-            print(row["case"], row["seed"], row["recording"], row["accepted"], row.get("p"), row["seconds"], flush=True)
-    rows = [json.loads(line) for line in RESULTS.read_text().splitlines()]
+    rows = independent.run_pending(jobs(), run, RESULTS, ("case", "seed", "recording"), args.workers,
+                                   lambda r: f"{r['case']} {r['seed']} {r['recording']} {r['accepted']} "
+                                             f"{r.get('p')} {r['seconds']}")
     print(write_table(sorted(rows, key=lambda r: (bool(r["present"]), r["case"], r["seed"], r["recording"]))))
-
 
 if __name__ == "__main__":
     main()
