@@ -47,7 +47,8 @@ from .effects import (ALWAYS_CALIBRATED, EFFECTS, Effect, calibrated_parameters,
 from .recording import Recording
 from .significance import FALSE_DISCOVERY_RATE, NullNoise, benjamini_hochberg, null_gain, null_z, p_value, standardised
 from .signals import folds as make_folds, kinematics, sample_windows, window_labels
-from .structure import DOMINANT_GAIN, HeldOutGain, Order, candidate_orders, fold_z, held_out_gain_sq, order_search
+from .structure import (DOMINANT_GAIN, RESOLVING_PERIODS, HeldOutGain, Order, candidate_orders, fold_z, held_out_gain_sq,
+                        order_search, resolves)
 from .timebase import GAP_FACTOR
 from .torsion_orders import MIN_REVOLUTIONS, fit_orders, nuisances as torsion_nuisances, order_evidence
 
@@ -121,15 +122,38 @@ def delta_bic(n_eff: float, mse_before: float, mse_after: float, added: int) -> 
     return n_eff * math.log(max(mse_after, 1e-300) / max(mse_before, 1e-300)) + added * math.log(n_eff)
 
 
+def eq7_terms(p: dict) -> dict[str, tuple[tuple[float, tuple[str, str]], ...]]:
+    """eq. (7)'s harmonics: per angle, (order, its cosine and sine coefficients' names)."""
+    return {"theta_m": ((p["omega_w"], ("aw1", "bw1")), (2 * p["omega_w"], ("aw2", "bw2"))),
+            "theta_l": ((p["omega_l"], ("al1", "bl1")),)}
+
+
 def eq7_orders(p: dict) -> dict[str, tuple[float, ...]]:
     """The angle orders eq. (7) already models in `p`: only those whose
     coefficients are nonzero. A nominal set without a kinematic-error model
     (all zero, as a catalogue gives no phase) must leave them to the order
     search, or the wave generator's two-lobe error can never be found."""
-    terms = {"theta_m": ((p["omega_w"], ("aw1", "bw1")), (2 * p["omega_w"], ("aw2", "bw2"))),
-             "theta_l": ((p["omega_l"], ("al1", "bl1")),)}
     return {angle: tuple(order for order, names in pairs if any(p.get(n, 0.0) for n in names))
-            for angle, pairs in terms.items()}
+            for angle, pairs in eq7_terms(p).items()}
+
+
+def unresolved_harmonics(rec: Recording, p: dict) -> dict[str, str]:
+    """eq. (7) coefficients whose harmonic the recording's travel does not
+    resolve (structure.resolves), each with why. Over a fraction of a
+    period a harmonic's cosine and sine are two smooth curves that take
+    whatever else changes along the travel: on an independent truth's
+    sweep with 1.6 rad of link travel a Bouc-Wen loop four times its
+    size moved bl1 to -14 times nominal, needed held out (24 %)."""
+    out = {}
+    for angle, terms in eq7_terms(p).items():
+        travel = float(np.ptp(getattr(rec, angle)))
+        for order, names in terms:
+            if not resolves(order, travel):
+                why = (f"{angle} travels {travel:.3g} rad ({travel / (2 * math.pi):.2g} revolution), under the "
+                       f"{RESOLVING_PERIODS:g} periods its order {order:g} needs to be told from anything else "
+                       "that changes along the travel")
+                out.update({n: why for n in names})
+    return out
 
 
 def place_offset(rec: Recording, p: dict, reference_torque: np.ndarray) -> dict:
@@ -906,20 +930,24 @@ class Diagnosis:
         return {n: Calibrated(n, self.nominal.get(n, parameters.table()[n].default), p[n],
                               fit.std.get(n, self.priors[n].std), self.priors[n]) for n in self.calibrated_names}
 
-    def resized(self, calibration: dict[str, Calibrated], p: dict) -> list[Finding]:
+    def resized(self, calibration: dict[str, Calibrated], p: dict) -> tuple[list[Finding], list[dict]]:
         """Effects of the nominal model with a parameter beyond its tolerance,
         and needed there: held at the edge of its tolerance (the rest refitted),
         the model must predict held-out data significantly worse. A parameter
         that only wandered along a look-alike's direction (bl1 against a0 and
         Kf on a short link travel) costs nothing held out and is not a finding.
-        The held fit starts at the edge of the band (RESIZE_Z tolerances)."""
-        moved: dict[str, list[Calibrated]] = {}
+        The held fit starts at the edge of the band (RESIZE_Z tolerances).
+        Returns the resized findings, and as unexplained structure the needed
+        moves of harmonics the recording's travel does not resolve
+        (unresolved_harmonics)."""
+        moved: dict[tuple[str, bool], list[Calibrated]] = {}
+        unresolved = unresolved_harmonics(self.rec, p)
         for c in calibration.values():
             effect = owner(c.name)
             if effect is not None and c.beyond_tolerance:
-                moved.setdefault(effect.id, []).append(c)
-        out = []
-        for effect_id, params in moved.items():
+                moved.setdefault((effect.id, c.name in unresolved), []).append(c)
+        out, unattributed = [], []
+        for (effect_id, is_unresolved), params in moved.items():
             edge = {c.name: c.prior.centre + math.copysign(RESIZE_Z * c.prior.std, c.z) for c in params}
             free = [n for n in self.calibrated_names + self._added_names if n not in edge]
             # Both fits from the same start and by the same steps: only the held parameters differ.
@@ -930,11 +958,26 @@ class Diagnosis:
             p_value = float(norm.sf(gain.z))
             self.say(f"{effect_id}: {', '.join(edge)} beyond tolerance; held to it, held-out gain "
                      f"{100 * gain.gain:.2f} % (z = {gain.z:.1f})")
-            if gain.gain > 0.003 and p_value <= FALSE_DISCOVERY_RATE / max(1, len(moved)) and gain.z > 3.0:
-                out.append(self._resize_or_lookalike(Finding(
-                    EFFECTS[effect_id], "resized", held.params, p, [c.name for c in params], p_value,
-                    round(float(norm.cdf(gain.z - 2.0)), 3), resized=params, resize_gain=gain)))
-        return sorted(out, key=lambda f: f.p_value)
+            if not (gain.gain > 0.003 and p_value <= FALSE_DISCOVERY_RATE / max(1, len(moved)) and gain.z > 3.0):
+                continue
+            if is_unresolved:
+                unattributed += self._unattributed_move(EFFECTS[effect_id], params, unresolved, gain, p_value)
+                continue
+            out.append(self._resize_or_lookalike(Finding(
+                EFFECTS[effect_id], "resized", held.params, p, [c.name for c in params], p_value,
+                round(float(norm.cdf(gain.z - 2.0)), 3), resized=params, resize_gain=gain)))
+        return sorted(out, key=lambda f: f.p_value), unattributed
+
+    def _unattributed_move(self, effect: Effect, params: list[Calibrated], unresolved: dict[str, str],
+                           gain, p_value: float) -> list[dict]:
+        """A needed move of harmonics the travel does not resolve: structure
+        the model needs, not a resized `effect` (a confident name it cannot back)."""
+        moves = ", ".join(f"{c.name} {c.nominal:.2g} -> {c.estimate:.2g}" for c in params)
+        feature = (f"what {moves} take up beyond tolerance (held to it, {100 * gain.gain:.0f} % worse held out), "
+                   f"but {unresolved[params[0].name]}: {effect.id} is one candidate, not a finding")
+        return [{"channel": c.name, "feature": feature, "held_out_gain": round(gain.gain, 4),
+                 "z": round(gain.z, 1), "p_value": p_value, "largest_at": "-"}
+                for c in self.channels_of(effect.part)]
 
     def _resize_or_lookalike(self, finding: Finding) -> Finding:
         """A resized finding, or an ambiguous one when a look-alike the model
@@ -1023,9 +1066,11 @@ def _diagnose(rec, nominal, progress, tolerance, workers):
     p, added = diag.select(calibrated)
     calibration = diag.calibration_of(diag.last_fit, p)
     diag.say("checking what remains")
-    result = DiagnosisResult(diag, dict(diag.nominal), dict(calibrated), p, added + diag.resized(calibration, p),
+    resized, unattributed = diag.resized(calibration, p)
+    result = DiagnosisResult(diag, dict(diag.nominal), dict(calibrated), p, added + resized,
                              calibration, diag.tested, diag.not_testable, dict(diag.sigma), located,
-                             remaining_structure(diag, p) + diag.unconfirmed_structure(), diag.orders_not_found)
+                             remaining_structure(diag, p) + diag.unconfirmed_structure() + unattributed,
+                             diag.orders_not_found)
     doc = document(result)
     if doc["unexplained"]:  # open-library fallback: propose terms for what no named effect explains
         from .open_library import propose_terms

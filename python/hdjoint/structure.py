@@ -137,12 +137,22 @@ class Order:
     channel: str = ""  # the residual it was found in, when several were searched
 
 
+# Periods of a ripple a recording's travel must cover for the ripple to be
+# told from a drift, an offset or anything else that changes along the travel.
+RESOLVING_PERIODS = 1.5
+
+
+def resolves(order: float, travel: float) -> bool:
+    """Whether `travel` (rad of an angle) resolves a ripple of `order` cycles per revolution."""
+    return order * travel >= 2 * np.pi * RESOLVING_PERIODS
+
+
 def candidate_orders(angle: str, travel: float) -> list[float]:
     """The order grid searched on `angle` ("theta_m": half orders up to 12,
-    "theta_l": whole orders up to 40), keeping orders the recording's travel
-    (rad) covers at least 1.5 times: a ripple needs periods to be told from a drift."""
+    "theta_l": whole orders up to 40), keeping the orders the recording's
+    travel (rad) resolves."""
     grid = [k / 2 for k in range(1, 25)] if angle == "theta_m" else [float(k) for k in range(1, 41)]
-    return [k for k in grid if k * travel >= 3 * np.pi]
+    return [k for k in grid if resolves(k, travel)]
 
 
 def _basis(angle, order, through):

@@ -47,6 +47,23 @@ def test_a_kinematic_error_ten_times_its_nominal_size_is_resized():
 
 
 @pytest.mark.slow
+def test_a_link_harmonic_ten_times_its_nominal_size_over_a_short_travel_is_structure_not_a_resize():
+    """The nominal eq. (7) link-angle terms a tenth of the joint's, on a
+    multisine whose link travels 1.75 rad (0.28 revolution): the move is
+    needed, but over a fraction of a period the harmonic takes up anything
+    that changes along the travel (a Bouc-Wen loop moved bl1 to -14x on an
+    independent truth's sweep). So the verdict is `unexplained`, naming the
+    terms and the travel, never a resized kinematic error."""
+    case = dataclasses.replace(CONTROL, name="small nominal link harmonic", nominal_off={"al1": 1e-5, "bl1": 5e-6})
+    _, doc = diagnose(record(case, 12.0, "multisine"), nominal_for(case))
+    assert doc["verdict"] == "unexplained", [(f["effect"], f["kind"]) for f in doc["findings"]]
+    assert not [f for f in doc["findings"] if f["effect"] == "kinematic_error"]
+    moved = [u for u in doc["unexplained"] if "al1" in u["feature"]]
+    assert moved and "theta_l travels 1.75 rad" in moved[0]["feature"] and moved[0]["p_value"] < 0.05
+    assert abs(doc["calibration"]["al1"]["z"]) > 3
+
+
+@pytest.mark.slow
 def test_corrected_set_fitted_on_two_recordings_is_consistent_on_a_third(tmp_path):
     case = next(c for c in CASES if c.present == ("gravity_load",))
     for name, seed, experiment in (("a", 1, "paper"), ("b", 4, "multisine")):
