@@ -48,7 +48,7 @@ from .recording import Recording
 from .significance import FALSE_DISCOVERY_RATE, NullNoise, benjamini_hochberg, null_gain, null_z, p_value, standardised
 from .signals import folds as make_folds, kinematics, sample_windows, window_labels
 from .structure import (DOMINANT_GAIN, RESOLVING_PERIODS, HeldOutGain, Order, candidate_orders, fold_z, held_out_gain_sq,
-                        order_search, resolves)
+                        order_search, resolves, unresolved_trend)
 from .timebase import GAP_FACTOR
 from .torsion_orders import MIN_REVOLUTIONS, fit_orders, nuisances as torsion_nuisances, order_evidence
 
@@ -610,9 +610,10 @@ class Diagnosis:
             r = self.shown_residual(channel, p)
             for angle in angles:
                 values, seen = getattr(self.rec, angle), []
+                through = smoothed if angle == "theta_m" else None
                 for o in order_search(values, r, self.fold, self.train, self.test,
                                       candidate_orders(angle, np.ptp(values)), existing.get(angle, ()), angle,
-                                      through=smoothed if angle == "theta_m" else None, seen=seen):
+                                      through=through, seen=seen, trend=unresolved_trend(values, angle, through)):
                     if (o.angle, o.order) not in found or o.gain.gain > found[o.angle, o.order].gain.gain:
                         found[o.angle, o.order] = replace(o, channel=channel.name)
                 self._orders_seen += [replace(o, channel=channel.name) for o in seen]

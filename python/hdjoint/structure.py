@@ -147,21 +147,47 @@ def resolves(order: float, travel: float) -> bool:
     return order * travel >= 2 * np.pi * RESOLVING_PERIODS
 
 
+def _order_grid(angle: str) -> list[float]:
+    return [k / 2 for k in range(1, 25)] if angle == "theta_m" else [float(k) for k in range(1, 41)]
+
+
 def candidate_orders(angle: str, travel: float) -> list[float]:
     """The order grid searched on `angle` ("theta_m": half orders up to 12,
     "theta_l": whole orders up to 40), keeping the orders the recording's
     travel (rad) resolves."""
-    grid = [k / 2 for k in range(1, 25)] if angle == "theta_m" else [float(k) for k in range(1, 41)]
-    return [k for k in grid if resolves(k, travel)]
+    return [k for k in _order_grid(angle) if resolves(k, travel)]
 
 
-def _basis(angle, order, through):
+# A harmonic the travel does not resolve spans fewer than 3 half-periods of
+# it: a polynomial of this degree in the angle takes it up.
+TREND_DEGREE = 3
+
+
+def unresolved_trend(values: np.ndarray, angle: str, through=None) -> np.ndarray | None:
+    """(column, sample): Legendre polynomials of degree 1..TREND_DEGREE in
+    `angle` over its travel, when the travel leaves some of the grid's orders
+    unresolved (None otherwise). An order is fitted beside them: over a short
+    travel a low order's ripple, one the search cannot resolve, leaks into the
+    lowest orders it can. On the independent truth every significant link
+    order found without them was one the truth lacks (its link order 2, over
+    1.3-2.4 rad, read as orders 4-9: docs/results/order_gate_scan.md)."""
+    lo, hi = float(np.min(values)), float(np.max(values))
+    if all(resolves(k, hi - lo) for k in _order_grid(angle)) or hi <= lo:
+        return None
+    x = 2.0 * (values - lo) / (hi - lo) - 1.0
+    columns = np.polynomial.legendre.legvander(x, TREND_DEGREE)[:, 1:].T
+    return np.stack([through(c) for c in columns]) if through is not None else columns
+
+
+def _basis(angle, order, through, trend=None):
     """cos, sin of `order` x `angle` (through the channel's filter, if it has
-    one: a ripple the channel sees smoothed fades with speed) and a constant."""
+    one: a ripple the channel sees smoothed fades with speed), a constant,
+    and the angle's unresolved trend, if any."""
     c, s = np.cos(order * angle), np.sin(order * angle)
     if through is not None:
         c, s = through(c), through(s)
-    return np.stack([c, s, np.ones_like(angle)])
+    columns = np.stack([c, s, np.ones_like(angle)])
+    return columns if trend is None else np.concatenate([columns, trend])
 
 
 def _harmonic_coefficients(basis, residual, rows):
@@ -169,12 +195,13 @@ def _harmonic_coefficients(basis, residual, rows):
     return np.linalg.solve(fit @ fit.T, fit @ residual[rows])
 
 
-def _floor_coefficients(angle, order, through, residual, rows):
+def _floor_coefficients(angle, order, through, residual, rows, trend=None):
     """_harmonic_coefficients at an off-order, on `rows`: without a filter the
     basis is needed there only (the same numbers, a fraction of the cost)."""
     if through is not None:
-        return _harmonic_coefficients(_basis(angle, order, through), residual, rows)
-    return _harmonic_coefficients(_basis(angle[rows], order, None), residual[rows], slice(None))
+        return _harmonic_coefficients(_basis(angle, order, through, trend), residual, rows)
+    return _harmonic_coefficients(_basis(angle[rows], order, None, None if trend is None else trend[:, rows]),
+                                  residual[rows], slice(None))
 
 
 # An order that alone explains this share of the held-out residual is a ripple
@@ -202,14 +229,15 @@ def _off_order_stretch(angle) -> float:
 
 
 def order_search(angle, residual, fold, train, test, orders, exclude=(), name="theta_m",
-                 max_orders: int = 2, through=None, seen: list | None = None) -> list[Order]:
+                 max_orders: int = 2, through=None, seen: list | None = None, trend=None) -> list[Order]:
     """Angle-synchronous analysis: least-squares power of the residual at each
     candidate order of `angle`; an order counts when its held-out gain is
     significant and it stands out of the spectrum (off-orders, at +1/4,
     give the floor that broadband structure and noise produce), or alone
     explains more than DOMINANT_GAIN of the held-out residual. `through`:
     the smoothing filter the residual channel sees the world through;
-    `seen`: a list that receives every order evaluated, significant or not."""
+    `seen`: a list that receives every order evaluated, significant or not;
+    `trend`: columns fitted beside each order (unresolved_trend)."""
     ok = np.isfinite(residual)
     res = np.where(ok, residual, 0.0)
     train, test = train & ok, test & ok
@@ -220,7 +248,7 @@ def order_search(angle, residual, fold, train, test, orders, exclude=(), name="t
     for k in orders:
         if any(abs(k - e) < 1e-9 for e in exclude):
             continue
-        basis = _basis(angle, k, through)
+        basis = _basis(angle, k, through, trend)
         coef = _harmonic_coefficients(basis, res, train)
         pred, amp = coef[:2] @ basis[:2], float(np.hypot(coef[0], coef[1]))
         # The floor is read off what the order leaves: a strong ripple's own
@@ -228,7 +256,7 @@ def order_search(angle, residual, fold, train, test, orders, exclude=(), name="t
         # not broadband structure. With it, cogging on the sweep, z = 7.1 and
         # 68 % of the held-out motor residual, stood 2.8 times over its floor.
         rest = np.where(ok, res - pred, 0.0)
-        floor = np.median([np.hypot(*_floor_coefficients(angle, k + d, through, rest, floor_rows)[:2])
+        floor = np.median([np.hypot(*_floor_coefficients(angle, k + d, through, rest, floor_rows, trend)[:2])
                            for d in offsets])
         found.append(Order(name, float(k), amp, held_out_gain(res, pred, fold, test), amp / max(floor, 1e-300)))
     if seen is not None:
