@@ -241,6 +241,11 @@ def order_search(angle, residual, fold, train, test, orders, exclude=(), name="t
     ok = np.isfinite(residual)
     res = np.where(ok, residual, 0.0)
     train, test = train & ok, test & ok
+    if trend is not None:
+        # Judged on what the trend leaves: the unresolved ripple, locally an
+        # offset, would otherwise swamp an order's held-out gain fold by fold.
+        smooth = np.concatenate([np.ones((1, len(res))), trend])
+        res = np.where(ok, res - _harmonic_coefficients(smooth, res, train) @ smooth, 0.0)
     # The floor needs no held-out prediction: every 4th training sample will do.
     floor_rows = np.flatnonzero(train)[::4]
     offsets = np.array(OFF_ORDERS) * _off_order_stretch(angle)
