@@ -79,3 +79,17 @@ def test_rows_are_grouped_by_the_engine_that_diagnosed_them():
             dict(row("b", ["cogging"], seed=1), commit="docs2", engine="abc123"),
             dict(row("c", [], seed=0), commit="old999")]
     assert bench._engines(rows) == "abc123 (effects s0, effects s1); old999 (controls s0)"
+
+
+def test_a_ripple_named_at_orders_the_truth_lacks_is_counted_apart(tmp_path):
+    """Seed 0's kinematic error has link order 2 and motor order 4 beyond eq. (7)
+    (hdjoint.truth.cases); a finding at link order 5 names the effect, not its orders."""
+    case = "kinematic error (extra orders)"
+    at = lambda *orders: {"effect": "kinematic_error", "orders": [list(o) for o in orders]}  # noqa: E731
+    rows = [row(case, ["kinematic_error"], run("missing_physics", at(("theta_l", 5.0))), seed=0),
+            row(case, ["kinematic_error"], run("missing_physics", at(("theta_l", 2.0), ("theta_m", 4.0))), seed=0),
+            row(case, ["kinematic_error"], run("missing_physics", at(("theta_m", 4.0))), seed=0)]
+    text = bench.write_table(rows, tmp_path / "table.md")
+    assert "| single effect named first (added, resized or in a look-alike set) | 3/3 (100 %)" in text
+    assert "| of those with ripples (kinematic error, cogging), named at the truth's orders only | 2/3 (67 %)" in text
+    assert "kinematic_error (added; theta_l 5)" in text
