@@ -204,11 +204,8 @@ def _first_said(row: dict) -> str:
 
 
 def _orders_right(row: dict) -> bool:
-    """The first finding names only orders the truth has (none: eq. (7)'s own, resized).
-    Rows written before 2026-11-24 did not keep the orders: they count as wrong."""
+    """The first finding names only orders the truth has (none: eq. (7)'s own, resized)."""
     first = row["runs"][0]["findings"][0]
-    if "orders" not in first:
-        return False
     case = next(c for c in EFFECT_CASES if c.name == row["case"])
     truth = truth_orders(draw(case, row["seed"], row["duration"]))
     return all((a, k) in truth for a, k in first["orders"])
@@ -226,6 +223,8 @@ def write_table(rows: list[dict], path: Path = TABLE) -> str:
     closed_named = [r for r in closure_rows if named_all(r) and closed(r)]
     missed = [r for r in single if not first_named(r) and "cannot_tell" in r["runs"][0]]
     rippled = [r for r in single if EFFECTS[r["present"][0]].slots and first_named(r)]
+    unrecorded = [r for r in rippled if "orders" not in r["runs"][0]["findings"][0]]
+    rippled = [r for r in rippled if r not in unrecorded]
     orders_right = [r for r in rippled if _orders_right(r)]
     alarms = sum(run["verdict"] != "consistent" for run in controls)
     told = [run for run in controls if "cannot_tell" in run]  # runs from before 2026-11-23 did not keep it
@@ -249,7 +248,8 @@ def write_table(rows: list[dict], path: Path = TABLE) -> str:
         f"| single effect named first (added, resized or in a look-alike set) | "
         f"{_pct(sum(map(first_named, single)), len(single))} | >= {100 * GOALS['named_first']:.0f} % |",
         f"| of those with ripples (kinematic error, cogging), named at the truth's orders only | "
-        f"{_pct(len(orders_right), len(rippled))} | - |",
+        f"{_pct(len(orders_right), len(rippled))}"
+        + (f" ({len(unrecorded)} more in rows written before orders were kept)" if unrecorded else "") + " | - |",
         f"| several effects: all named | {_pct(sum(map(named_all, multi)), len(multi))} | all |",
         f"| closure: corrected set `consistent` on the second recording | "
         f"{_pct(sum(map(closed, closure_rows)), len(closure_rows))}; with every effect named on the first: "
