@@ -604,16 +604,21 @@ class Diagnosis:
         existing = eq7_orders(p) if part == "transmission" else {}
         found: dict[tuple[str, float], Order] = {}
         self._orders_seen = []
+        # Per angle, what every channel's search shares: its values, filter, grid and unresolved trend.
+        searched = {}
+        for angle in angles:
+            values = getattr(self.rec, angle)
+            through = smoothed if angle == "theta_m" else None
+            searched[angle] = (values, through, candidate_orders(angle, np.ptp(values)),
+                               unresolved_trend(values, angle, through))
         for channel in channels:
             # Not the fit's residual, 0 where the channel is blind: a ripple's
             # prediction there counted as error (and a fold of rest, 0/0, as -1e295).
             r = self.shown_residual(channel, p)
-            for angle in angles:
-                values, seen = getattr(self.rec, angle), []
-                through = smoothed if angle == "theta_m" else None
-                for o in order_search(values, r, self.fold, self.train, self.test,
-                                      candidate_orders(angle, np.ptp(values)), existing.get(angle, ()), angle,
-                                      through=through, seen=seen, trend=unresolved_trend(values, angle, through)):
+            for angle, (values, through, orders, trend) in searched.items():
+                seen = []
+                for o in order_search(values, r, self.fold, self.train, self.test, orders, existing.get(angle, ()),
+                                      angle, through=through, seen=seen, trend=trend):
                     if (o.angle, o.order) not in found or o.gain.gain > found[o.angle, o.order].gain.gain:
                         found[o.angle, o.order] = replace(o, channel=channel.name)
                 self._orders_seen += [replace(o, channel=channel.name) for o in seen]
