@@ -102,5 +102,6 @@ def main() -> None:
                                    lambda r: f"{r['case']} {r['seed']} {r['recording']} {len(r['significant'])}")
     print(write_table(rows))
 
+
 if __name__ == "__main__":
     main()

@@ -979,8 +979,9 @@ class Diagnosis:
         """A needed move of harmonics the travel does not resolve: structure
         the model needs, not a resized `effect` (a confident name it cannot back)."""
         moves = ", ".join(f"{c.name} {c.nominal:.2g} -> {c.estimate:.2g}" for c in params)
+        why = "; and ".join(dict.fromkeys(unresolved[c.name] for c in params))  # both angles' terms may have moved
         feature = (f"what {moves} take up beyond tolerance (held to it, {100 * gain.gain:.0f} % worse held out), "
-                   f"but {unresolved[params[0].name]}: {effect.id} is one candidate, not a finding")
+                   f"but {why}: {effect.id} is one candidate, not a finding")
         return [{"channel": c.name, "feature": feature, "held_out_gain": round(gain.gain, 4),
                  "z": round(gain.z, 1), "p_value": p_value, "largest_at": "-"}
                 for c in self.channels_of(effect.part)]
