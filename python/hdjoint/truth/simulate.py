@@ -219,7 +219,7 @@ def simulate(truth: dict, form: Form, setup: Setup, nominal: dict) -> Recording:
     plant = _Plant(truth, form, float(th_ref[0]))
     ctl = setup.controller
     alpha = 1.0 - math.exp(-2.0 * math.pi * ctl.speed_cutoff_hz * ts)
-    theta_m, theta_l, tau, current = (np.empty(n) for _ in range(4))
+    theta_m, theta_l, tau, current, loop = (np.empty(n) for _ in range(5))
     read_m = setup.motor_encoder.read
     zero = float(read_m(np.array([plant.theta_m]))[0]) - N * th_ref[0]
     i_apply = float(feed_forward[0])
@@ -230,6 +230,7 @@ def simulate(truth: dict, form: Form, setup: Setup, nominal: dict) -> Recording:
             if s == at_substep[k]:
                 theta_m[k], theta_l[k] = plant.theta_m, plant.theta_l
                 tau[k] = plant.transmitted()
+                loop[k] = plant.z_hys
                 current[k] = i_apply
             plant.step(h, i_apply, tk + s * h)
         reading = float(read_m(np.array([theta_m[k]]))[0]) - zero
@@ -244,4 +245,5 @@ def simulate(truth: dict, form: Form, setup: Setup, nominal: dict) -> Recording:
     sensor = tau + rng.normal(0.0, setup.torque_noise, n) if setup.with_torque_sensor else None
     return Recording(time=stamps, i_m=setup.current_sensor.read(current, ts, rng),
                      theta_m=setup.motor_encoder.read(theta_m), theta_l=setup.link_encoder.read(theta_l),
-                     tau_sensor=sensor, extra={"tau_joint": tau, "i_true": current}, path=None)
+                     tau_sensor=sensor, extra={"tau_joint": tau, "i_true": current, "hysteresis_torque": loop},
+                     path=None)
