@@ -8,6 +8,9 @@ model sees through the transmission's filter. Driven through the
 kinematics' 6 ms smoothing it was not correlated with the truth's loop at
 all (-0.02 at 4x, seed 0), and the effect was undetectable even from the
 truth's values (held-out gain 0.1 %)."""
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -15,14 +18,10 @@ from hdjoint.channels import Prepared, hysteresis_torque, tau_transmission
 from hdjoint.signals import kinematics
 from hdjoint.truth.cases import EFFECT_CASES, draw, record
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
+from effect_detectability import ORACLE  # noqa: E402  (the truth's loop in the model's parameters)
+
 pytestmark = pytest.mark.slow
-
-
-def _loop_at_truth(joint) -> dict:
-    t = joint.truth
-    if joint.form.hysteresis == "bouc_wen":  # same loading branch: saturation A/(beta+gamma), initial slope A
-        return {"hys_H": t["bw_A"] / (t["bw_beta"] + t["bw_gamma"]), "hys_sigma": t["bw_A"]}
-    return {"hys_H": t["dahl_H"], "hys_sigma": t["dahl_rate"]}
 
 
 # Correlation with the truth's loop over 10 s (seeds 0-4: 0.75, 0.70, 0.50,
@@ -33,7 +32,7 @@ def test_the_modelled_loop_follows_the_truths_through_the_transmissions_filter(s
     joint = draw(case, seed, 10.0)
     rec = record(joint, 0)
     prep = Prepared(rec, kinematics(rec), rec.time - rec.time[0])
-    p = dict(joint.nominal, **_loop_at_truth(joint))
+    p = dict(joint.nominal, **ORACLE["hysteresis"](joint))
     truth = rec.extra["hysteresis_torque"]
     # What the loop adds to the transmission channel the diagnosis compares with the sensor.
     sharp = tau_transmission(prep, p) - tau_transmission(prep, dict(p, hys_H=0.0))
