@@ -93,3 +93,24 @@ def test_a_ripple_named_at_orders_the_truth_lacks_is_counted_apart(tmp_path):
     assert "| single effect named first (added, resized or in a look-alike set) | 3/3 (100 %)" in text
     assert "| of those with ripples (kinematic error, cogging), named at the truth's orders only | 2/3 (67 %)" in text
     assert "kinematic_error (added; theta_l 5)" in text
+
+
+def test_misses_are_counted_against_the_oracle_retest(tmp_path):
+    """A miss effect_detectability.py could not show from the truth's own values
+    counts as hidden; one it did not retest is said to be untested; a named
+    effect is not a miss at all."""
+    import json
+    oracle_path = tmp_path / "oracle.jsonl"
+    oracle_path.write_text("\n".join(json.dumps(r) for r in [
+        {"case": "hysteresis", "seed": 0, "verdict": "not detectable"},  # old rows carry no "effect"
+        {"case": "backlash", "seed": 2, "effect": "backlash", "verdict": "detectable"},
+        {"case": "viscous friction", "seed": 0, "effect": "viscous_friction", "verdict": "not detectable"},
+    ]) + "\n")
+    rows = [
+        row("hysteresis", ["hysteresis"], run("consistent")),
+        row("backlash", ["backlash"], run("consistent"), seed=2),
+        row("thermal drift", ["thermal_drift"], run("consistent")),
+        row("viscous friction", ["viscous_friction"], run("missing_physics", {"effect": "viscous_friction"})),
+    ]
+    text = bench.write_table(rows, tmp_path / "table.md", oracle=bench.load_oracle(oracle_path))
+    assert "cannot show either (effect_detectability.md) | 1/3 (33 %); 1 not retested |" in text
