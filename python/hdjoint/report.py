@@ -227,9 +227,11 @@ def build(result, doc: dict) -> str:
         e = doc["estimator"]
         rows = [(name, _fmt(e["nominal"][name]["rms"]), _fmt(e["corrected"][name]["rms"]),
                  _fmt(e["nominal"][name]["max"]), _fmt(e["corrected"][name]["max"]))
-                for name in ("tau_compliance", "tau_ukf") if "error" not in e["nominal"]]
+                for name in ("tau_compliance", "tau_ukf") if "error" not in e["nominal"] and "error" not in e["corrected"]]
+        failed = [f"{label} parameters: {e[label]['error']}" for label in ("nominal", "corrected") if "error" in e[label]]
         fit_html += "<h3>Torque estimators against the torque sensor</h3>" + _table(
             rows, ["estimate", "RMS nominal", "RMS corrected", "max nominal", "max corrected"])
+        fit_html += "".join(f"<p>The estimator did not run with the {html.escape(f)}</p>" for f in failed)
     sections.append("<h2>Fit before and after</h2>" + fit_html)
     if doc.get("validation"):
         sections.append(_validation_section(doc["validation"]))
