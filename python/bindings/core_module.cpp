@@ -394,6 +394,17 @@ OutArray torque_constant_scale_law(const std::map<std::string, double>& values, 
     return make_array(std::move(s));
 }
 
+// The kinematic error of eq. (7) with its extra orders at each pair of angles: the
+// transmission's law (linear in its amplitudes, which the diagnosis uses as a basis).
+OutArray kinematic_error_law(const std::map<std::string, double>& values, Array theta_m, Array theta_l) {
+    const std::size_t n = theta_m.shape(0);
+    check_lengths(n, {theta_l.shape(0)});
+    const Parameters p = parameters_from(values, true, true);
+    std::vector<double> e(n);
+    for (std::size_t j = 0; j < n; ++j) e[j] = kinematic_error(theta_m(j), theta_l(j), p);
+    return make_array(std::move(e));
+}
+
 // Cogging torque on the motor (0 when off).
 OutArray cogging_law(const std::map<std::string, double>& values, Array theta_m) {
     const std::size_t n = theta_m.shape(0);
@@ -492,6 +503,8 @@ NB_MODULE(_core, m) {
     m.def("torque_constant_scale", &torque_constant_scale_law, nb::arg("params"), nb::arg("t"),
           "The torque constant's warm-up scale 1 + Kt_warmup*(1 - exp(-t/Kt_warmup_tc)) at each time since the "
           "start: the FMUs' code.");
+    m.def("kinematic_error", &kinematic_error_law, nb::arg("params"), nb::arg("theta_m"), nb::arg("theta_l"),
+          "The kinematic error of eq. (7) with its extra orders at each motor and link angle, rad.");
     m.def("cogging_torque", &cogging_law, nb::arg("params"), nb::arg("theta_m"),
           "Cogging torque on the motor at each motor angle (0 when off).");
     m.def("link_torque", &link_torque_law, nb::arg("params"), nb::arg("theta_l"), nb::arg("omega_l"),

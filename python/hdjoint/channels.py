@@ -42,7 +42,8 @@ class Prepared:
         self._smoothed: dict[int, np.ndarray] = {}
         self._aligned: tuple | None = None  # (shift, smoothed current), see _smoothed_current
         self._friction: tuple | None = None  # (law parameters, smoothed friction), see smoothed_friction
-        self._torsion: tuple | None = None  # (geometry parameters, its high-pass part, its rate, itself), see _geometric_torsion
+        self._torsion: tuple | None = None  # (geometry parameters but a0, its high-pass part, its rate), see _geometric_torsion
+        self._torsion_basis: _TorsionBasis | None = None
         self._sharp: _Filter | None = None
         self._sharp_smoothed: dict[str, np.ndarray] = {}
 
@@ -101,9 +102,61 @@ TORSION_RATE_SIGMA = 0.0015  # s
 # amplitudes, and the slots of its extra orders (<slot>_order, <slot>_a, <slot>_b).
 KINEMATIC_EQ7 = ("al1", "bl1", "aw1", "bw1", "aw2", "bw2")
 KINEMATIC_EXTRA = ("ke_m1", "ke_m2", "ke_l1", "ke_l2")
+# The kinematic error is linear in its amplitudes (a0, eq. (7)'s, the extra
+# orders' a and b) once the ratio, wave numbers and orders are fixed.
+KINEMATIC_AMPLITUDES = ("a0",) + KINEMATIC_EQ7 + tuple(f"{slot}_{k}" for slot in KINEMATIC_EXTRA for k in ("a", "b"))
+KINEMATIC_SHAPE = ("N", "omega_l", "omega_w") + tuple(f"{slot}_order" for slot in KINEMATIC_EXTRA)
 # What the torsion less the kinematic error depends on (total_torsion, kinematic_error).
-GEOMETRY_PARAMETERS = ("N", "a0", "omega_l", "omega_w") + KINEMATIC_EQ7 + tuple(
-    f"{slot}_{k}" for slot in KINEMATIC_EXTRA for k in ("order", "a", "b"))
+GEOMETRY_PARAMETERS = KINEMATIC_SHAPE + KINEMATIC_AMPLITUDES
+
+
+@dataclass
+class _TorsionBasis:
+    """The torsion less the kinematic error as base - amplitudes . columns, for
+    one shape (KINEMATIC_SHAPE): as itself, its part above the transmission's
+    filter, and its rate through that filter (VIEWS). A fit moves the
+    amplitudes (a0 alone in 646 of the 936 recomputations of a 58 s
+    recording's diagnosis, profiled), and each recomputation had run the
+    compliance model and two filters over the whole run. a0 is an offset,
+    which neither filtered view sees."""
+    shape: tuple
+    base: dict  # view -> the torsion with every amplitude 0
+    columns: dict  # view -> (amplitude, n): the kinematic error of each unit amplitude but a0
+
+    VIEWS = ("itself", "high_pass", "rate")
+
+    @classmethod
+    def build(cls, prep: Prepared, shape: dict) -> "_TorsionBasis":
+        # The other parameters at their defaults; a rigid wave generator, no dead zone.
+        zero = dict(parameters.defaults(), **shape, **{a: 0.0 for a in KINEMATIC_AMPLITUDES})
+        native = parameters.for_estimator(dict(zero, Kw=1e9, hys_H=0.0, backlash=0.0, i_delay=0.0))
+        rec = prep.rec
+        torsion = np.nan_to_num(prep.per_window(
+            lambda i, tm, tl: _core.compliance(native, i, tm, tl)["dtheta_f"], rec.i_m, rec.theta_m, rec.theta_l))
+        unit = 1e-3  # rad, inside every amplitude's range
+        units = [_core.kinematic_error(_native(dict(zero, **{a: unit})), rec.theta_m, rec.theta_l) / unit
+                 for a in KINEMATIC_AMPLITUDES[1:]]
+        views = [cls._views(prep, x) for x in [torsion] + units]
+        return cls(tuple(shape.values()), dict(zip(cls.VIEWS, views[0])),
+                   {v: np.stack([u[k] for u in views[1:]]) for k, v in enumerate(cls.VIEWS)})
+
+    @staticmethod
+    def _views(prep: Prepared, x: np.ndarray) -> tuple:
+        return x, x - prep.sharp()(x), prep.sharp()(x, 1)
+
+    def at(self, view: str, p: dict) -> np.ndarray:
+        out = self.base[view].copy()
+        for column, name in zip(self.columns[view], KINEMATIC_AMPLITUDES[1:]):
+            if _get(p, name):  # most are off: the extra orders' slots
+                out -= _get(p, name) * column
+        return out - _get(p, "a0") if view == "itself" else out
+
+
+def _torsion_basis(prep: Prepared, p: dict) -> _TorsionBasis:
+    shape = tuple(_get(p, n) for n in KINEMATIC_SHAPE)
+    if prep._torsion_basis is None or prep._torsion_basis.shape != shape:
+        prep._torsion_basis = _TorsionBasis.build(prep, dict(zip(KINEMATIC_SHAPE, shape)))
+    return prep._torsion_basis
 
 
 def _geometric_torsion(prep: Prepared, p: dict) -> tuple[np.ndarray, np.ndarray]:
@@ -113,23 +166,16 @@ def _geometric_torsion(prep: Prepared, p: dict) -> tuple[np.ndarray, np.ndarray]
     only when the geometry changes: keyed on everything, it ran the compliance
     model over the whole run for every Jacobian column of Kf, Cf, Kt, ...
     (1794 times, 32 of 57 s of a 58 s recording's diagnosis, profiled)."""
-    geometry = {n: _get(p, n) for n in GEOMETRY_PARAMETERS}
-    key = tuple(geometry.values())
+    key = tuple(_get(p, n) for n in GEOMETRY_PARAMETERS if n != "a0")
     if prep._torsion is None or prep._torsion[0] != key:
-        # The other parameters at their defaults; a rigid wave generator, no dead zone.
-        geometry = parameters.for_estimator(dict(parameters.defaults(), **geometry, Kw=1e9, hys_H=0.0,
-                                                 backlash=0.0, i_delay=0.0))
-        rec = prep.rec
-        torsion = np.nan_to_num(prep.per_window(
-            lambda i, tm, tl: _core.compliance(geometry, i, tm, tl)["dtheta_f"], rec.i_m, rec.theta_m, rec.theta_l))
-        prep._torsion = (key, torsion - prep.sharp()(torsion), prep.sharp()(torsion, 1), torsion)
+        basis = _torsion_basis(prep, p)
+        prep._torsion = (key, basis.at("high_pass", p), basis.at("rate", p))
     return prep._torsion[1], prep._torsion[2]
 
 
 def torsion_less_kinematic(prep: Prepared, p: dict) -> np.ndarray:
     """The encoders' torsion theta_m/N - theta_l less the model's kinematic error (and a0), rad, whole run."""
-    _geometric_torsion(prep, p)
-    return prep._torsion[3]
+    return _torsion_basis(prep, p).at("itself", p)
 
 
 def torsion_rate(prep: Prepared, p: dict) -> np.ndarray:
