@@ -46,11 +46,11 @@ def unsettled_hypotheses(last_round: list[dict], unexplained: list[dict]) -> lis
 
 def _not_enough(h: dict) -> str:
     """Why the evidence fell short: the fit is not the effect, the folds (a
-    stationary effect), or the simulated null (a drift)."""
+    stationary effect), or the simulated null (Effect.uneven_over_folds)."""
     if "degenerate" in h:
         return f"its fit is not the effect: {h['degenerate']}"
     if "z_against_null" in h:
-        return (f"no more than the residual's own slow wander would (z = {h['z_against_null']:.2g} against the "
+        return (f"no more than noise with the residual's own colour would (z = {h['z_against_null']:.2g} against the "
                 f"simulated null, p = {h['p_value']:.2g})")
     return f"not fold by fold (z = {h['z']:.2g}, p = {h['p_value']:.2g})"
 

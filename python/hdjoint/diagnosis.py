@@ -347,7 +347,7 @@ class Hypothesis:
     degenerate: str | None = None  # why the fit is not the effect it stands for (Effect.degenerate)
     p_raw: float = 1.0
     p_value: float = 1.0  # Benjamini-Hochberg adjusted over the round
-    # An effect that lives in time: its pooled held-out gain in standard deviations of the simulated null's.
+    # An effect uneven over the folds by nature: its pooled held-out gain in standard deviations of the null's.
     z_against_null: float | None = None
     # Judged on the encoders' torsion (torsion_orders.py), not on the torque channels: what it was
     # seen on, and its parameters' intervals from that fit (calibration's refit leaves them alone).
@@ -355,11 +355,11 @@ class Hypothesis:
     intervals: dict | None = None
 
     def evidence_z(self) -> float:
-        """The z its acceptance and confidence read: over the folds, or against the null for a drift."""
+        """The z its acceptance and confidence read: over the folds, or against the null (Effect.uneven_over_folds)."""
         return self.gain.z if self.z_against_null is None else self.z_against_null
 
-    def drift_evidence(self) -> dict:
-        """For the record: the z a drift is judged by (nothing for the others)."""
+    def pooled_evidence(self) -> dict:
+        """For the record: the z an effect uneven over the folds is judged by (nothing for the others)."""
         return {} if self.z_against_null is None else {"z_against_null": round(self.z_against_null, 2)}
 
     def accepted(self) -> bool:
@@ -381,11 +381,12 @@ class Hypothesis:
         return self.worst_channel_ratio if self.pooled_ratio is None else self.pooled_ratio
 
     def _steady_over_folds(self) -> bool:
-        """A stationary effect helps most held-out folds, by z > 3 over them. A
-        drift helps the folds far from the run's mean temperature, not the rest:
-        its evidence is its pooled gain against the simulated null, which is
-        its p-value restated, so the p-value alone decides (docs/diagnosis_measurements.md,
-        "Thermal drift of Kt: the law and its test", for the false alarms this gives on controls)."""
+        """A stationary effect helps most held-out folds, by z > 3 over them. An
+        effect uneven over the folds by nature (Effect.uneven_over_folds: a
+        drift, a dead zone, a loop) is judged by its pooled gain against the
+        simulated null, which is its p-value restated, so the p-value alone
+        decides (docs/diagnosis_measurements.md, "Thermal drift of Kt: the law
+        and its test" and "Reversals judged pooled", for the false alarms this gives on controls)."""
         if self.z_against_null is not None:
             return True
         return self.gain.z > 3.0 and self.gain.folds_improved >= 0.7 * self.gain.folds_compared
@@ -725,7 +726,7 @@ class Diagnosis:
         rows = [self.channels.index(c) for c in channels]
         jac = self._jacobian(fit.params, names_all, channels)
         noise = self._noise.replicates(rows)
-        if effect.lives_in_time:
+        if effect.uneven_over_folds:
             gain_null = null_gain(noise, jac, self.fit_index, self.fold, self.test)
             hypothesis.p_raw = p_value(gain.gain, gain_null)
             hypothesis.z_against_null = standardised(gain.gain, gain_null)
@@ -877,7 +878,7 @@ class Diagnosis:
                                  "accepted": h.accepted(), **({"degenerate": h.degenerate} if h.degenerate else {}),
                                  **({"seen_on": h.seen_on, "orders": [{"angle": o.angle, "order": o.order}
                                                                       for o in h.orders]} if h.seen_on else {}),
-                                 **h.drift_evidence()}
+                                 **h.pooled_evidence()}
                                 for h in tried])
             accepted = [h for h in tried if h.accepted()]
             if not accepted:

@@ -216,7 +216,7 @@ def finding_document(result, f) -> dict:
         "physics_left_out": f.effect.physics,
         "held_out_gain": round(h.gain.gain, 5),
         "z": round(h.gain.z, 2),
-        **h.drift_evidence(),
+        **h.pooled_evidence(),
         "p_value_raw": h.p_raw,
         "folds_improved": f"{h.gain.folds_improved}/{h.gain.folds_compared}",
         "delta_bic": round(h.delta_bic, 1),

@@ -2,7 +2,7 @@
 and the Benjamini-Hochberg correction across hypotheses and locations.
 
 The statistic is the held-out gain's z over folds (structure.held_out_gain_sq);
-for an effect that lives in time (a drift), the pooled held-out gain.
+for an effect uneven over the folds by nature (a drift, a dead zone, a loop), the pooled held-out gain.
 Its distribution when the hypothesis is false is not the normal one: the
 residual is coloured (smoothing filters, model-form differences), and a fit
 on the training folds always finds something. So the null distribution is
@@ -119,8 +119,8 @@ def null_z(noise: np.ndarray, jacobian: np.ndarray, fit_rows: np.ndarray, fold, 
 def null_gain(noise: np.ndarray, jacobian: np.ndarray, fit_rows: np.ndarray, fold, test) -> np.ndarray:
     """The pooled held-out gain (1 - MSE after / MSE before over every held-out
     sample, structure.HeldOutGain.gain) of a linear hypothesis fitted to each
-    noise replicate: the statistic of effects that live in time (a drift),
-    whose gain is uneven over the folds by nature."""
+    noise replicate: the statistic of effects whose gain is uneven over the
+    folds by nature (Effect.uneven_over_folds)."""
     errors = _null_fold_errors(noise, jacobian, fit_rows, fold, test)
     if errors is None:
         return np.zeros(len(noise))
