@@ -383,7 +383,7 @@ class Hypothesis:
     def _steady_over_folds(self) -> bool:
         """A stationary effect helps most held-out folds, by z > 3 over them. An
         effect uneven over the folds by nature (Effect.uneven_over_folds: a
-        drift, a dead zone, a loop) is judged by its pooled gain against the
+        drift, a dead zone) is judged by its pooled gain against the
         simulated null, which is its p-value restated, so the p-value alone
         decides (docs/diagnosis_measurements.md, "Thermal drift of Kt: the law
         and its test" and "Reversals judged pooled", for the false alarms this gives on controls)."""

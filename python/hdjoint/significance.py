@@ -2,7 +2,7 @@
 and the Benjamini-Hochberg correction across hypotheses and locations.
 
 The statistic is the held-out gain's z over folds (structure.held_out_gain_sq);
-for an effect uneven over the folds by nature (a drift, a dead zone, a loop), the pooled held-out gain.
+for an effect uneven over the folds by nature (a drift, a dead zone), the pooled held-out gain.
 Its distribution when the hypothesis is false is not the normal one: the
 residual is coloured (smoothing filters, model-form differences), and a fit
 on the training folds always finds something. So the null distribution is
