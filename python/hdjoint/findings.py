@@ -12,7 +12,7 @@ from .calibration import INTERVAL
 from .cannot_tell import cannot_tell
 from .significance import FALSE_DISCOVERY_RATE, NullNoise, benjamini_hochberg, null_z, p_value
 from .signals import regime_filter
-from .structure import scan
+from .structure import resolves, scan
 
 
 def _rms(x) -> float:
@@ -87,8 +87,20 @@ def where(diag, finding) -> dict:
         "contribution_rms": round(_rms(contribution), 5),
     }
     if finding.orders:
-        out["angle"] = [{"angle": o.angle, "order": o.order} for o in finding.orders]
+        out["angle"] = [_order_record(o, diag.rec) for o in finding.orders]
     return out
+
+
+def _order_record(o, rec) -> dict:
+    """An order of a finding; one the travel does not resolve says so, with
+    the travel and the orders it cannot tell apart (structure.unresolved_order)."""
+    if o.resolved:
+        return {"angle": o.angle, "order": o.order}
+    travel = float(np.ptp(getattr(rec, o.angle)))
+    alike = [k for k in range(int(o.order), 41) if not resolves(k, travel)]
+    return {"angle": o.angle, "order": o.order, "resolved": False,
+            "note": f"{o.angle} travels {travel / (2 * np.pi):.2g} revolution: orders {alike[0]} to {alike[-1]} "
+                    "fit it alike; the lowest the model lacks stands for them"}
 
 
 def fit_figures(diag, finding) -> dict:

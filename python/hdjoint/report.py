@@ -53,7 +53,8 @@ def _where_text(w: dict) -> str:
     if w.get("time_segments"):
         text += "; strongest at " + ", ".join(f"{a:g}-{b:g} s" for a, b in w["time_segments"][:3])
     if w.get("angle"):
-        text += "; at " + ", ".join(f"order {o['order']:g} of {o['angle']}" for o in w["angle"])
+        text += "; at " + ", ".join(f"order {o['order']:g} of {o['angle']}" + (f" ({o['note']})" if "note" in o else "")
+                                    for o in w["angle"])
     return text
 
 

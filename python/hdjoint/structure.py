@@ -135,6 +135,9 @@ class Order:
     gain: HeldOutGain
     prominence: float  # power at this order over the median power at off-orders
     channel: str = ""  # the residual it was found in, when several were searched
+    # False for an order the travel does not resolve (unresolved_order): it stands
+    # for whatever low order of the angle the travel cannot tell from it.
+    resolved: bool = True
 
 
 # Periods of a ripple a recording's travel must cover for the ripple to be
@@ -177,6 +180,30 @@ def unresolved_trend(values: np.ndarray, angle: str, through=None) -> np.ndarray
     x = 2.0 * (values - lo) / (hi - lo) - 1.0
     columns = np.polynomial.legendre.legvander(x, TREND_DEGREE)[:, 1:].T
     return np.stack([through(c) for c in columns]) if through is not None else columns
+
+
+def lowest_unresolved_order(values: np.ndarray, angle: str, exclude=()) -> float | None:
+    """The lowest order of `angle`'s grid that the travel does not resolve
+    and the model does not have (`exclude`), or None."""
+    travel = float(np.ptp(values))
+    return next((k for k in _order_grid(angle)
+                 if not resolves(k, travel) and all(abs(k - e) > 1e-9 for e in exclude)), None)
+
+
+def unresolved_order(values, residual, fold, train, test, order: float, name: str) -> Order:
+    """An order the travel does not resolve, fitted alone with a constant:
+    over a fraction of its period its cosine and sine are two smooth curves
+    of the angle, so its gain is that of slow structure along the angle,
+    whatever its true low order. Fold by fold such structure is as uneven as
+    the angle's visits to each place: it is judged pooled against the
+    simulated null (Diagnosis._try), never by its folds or its spectrum."""
+    ok = np.isfinite(residual)
+    res = np.where(ok, residual, 0.0)
+    basis = _basis(values, order, None)
+    coef = _harmonic_coefficients(basis, res, train & ok)
+    pred = coef[:2] @ basis[:2]
+    return Order(name, float(order), float(np.hypot(coef[0], coef[1])),
+                 held_out_gain(res, np.where(ok, pred, 0.0), fold, test & ok), float("nan"), resolved=False)
 
 
 def _basis(angle, order, through, trend=None):

@@ -5,7 +5,8 @@ resolved ripple is still found beside it."""
 import numpy as np
 
 from hdjoint.signals import folds
-from hdjoint.structure import candidate_orders, order_search, unresolved_trend
+from hdjoint.structure import (candidate_orders, lowest_unresolved_order, order_search, unresolved_order,
+                               unresolved_trend)
 
 N, FOLDS, TRAVEL = 8000, 40, 2.4  # rad of link travel: the independent truth's paper run
 
@@ -47,3 +48,25 @@ def test_no_trend_where_the_travel_resolves_every_order_of_the_grid():
     assert unresolved_trend(theta, "theta_m") is None
     assert unresolved_trend(theta, "theta_l") is None
     assert unresolved_trend(np.linspace(0.0, 2.0, N), "theta_m").shape == (3, N)
+
+
+def test_the_lowest_unresolved_link_order_the_model_lacks():
+    theta, _ = _sweep()
+    assert lowest_unresolved_order(theta, "theta_l") == 1.0
+    assert lowest_unresolved_order(theta, "theta_l", exclude=(1.0,)) == 2.0  # eq. (7) has omega_l = 1
+    assert lowest_unresolved_order(np.linspace(0.0, 20.0, N), "theta_l", exclude=(1.0,)) is None
+
+
+def test_an_unresolved_order_takes_up_slow_structure_along_the_angle_and_not_noise():
+    """The order the search cannot resolve (nothing found above) is still
+    slow structure along the angle: fitted as the lowest unresolved order
+    it predicts the held-out folds of a ripple at another low order, and
+    nothing of pure noise."""
+    theta, noise = _sweep()
+    fold = folds(N, FOLDS)
+    test = fold % 2 == 1
+    ripple = unresolved_order(theta, 1.5 * np.cos(3.0 * theta + 0.3) + noise, fold, ~test, test, 2.0, "theta_l")
+    assert not ripple.resolved and ripple.order == 2.0 and ripple.angle == "theta_l"
+    assert ripple.gain.gain > 0.25  # of at most 0.53 (the ripple's share of the variance)
+    alone = unresolved_order(theta, noise, fold, ~test, test, 2.0, "theta_l")
+    assert alone.gain.gain < 0.005
