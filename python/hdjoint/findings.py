@@ -12,7 +12,7 @@ from .calibration import INTERVAL
 from .cannot_tell import cannot_tell
 from .significance import FALSE_DISCOVERY_RATE, NullNoise, benjamini_hochberg, null_z, p_value
 from .signals import regime_filter
-from .structure import resolves, scan
+from .structure import RESOLVING_PERIODS, resolves, scan
 
 
 def _rms(x) -> float:
@@ -100,7 +100,8 @@ def _order_record(o, rec) -> dict:
     alike = [k for k in range(int(o.order), 41) if not resolves(k, travel)]
     return {"angle": o.angle, "order": o.order, "resolved": False,
             "note": f"{o.angle} travels {travel / (2 * np.pi):.2g} revolution: orders {alike[0]} to {alike[-1]} "
-                    "fit it alike; the lowest the model lacks stands for them"}
+                    f"fit it alike; the lowest the model lacks stands for them (a travel of "
+                    f"{2 * np.pi * RESOLVING_PERIODS / o.order:.2g} rad resolves order {o.order:g})"}
 
 
 def fit_figures(diag, finding) -> dict:

@@ -25,7 +25,7 @@ def test_an_unresolved_link_order_is_named_at_its_size():
     assert (first["effect"], first["kind"]) == ("kinematic_error", "added"), doc["findings"]
     (order,) = first["where"]["angle"]
     assert (order["angle"], order["order"], order["resolved"]) == ("theta_l", 2.0, False)
-    assert "orders 2 to" in order["note"]
+    assert "orders 2 to" in order["note"] and "rad resolves order 2" in order["note"]
     slot = next(n[: -len("_order")] for n, v in first["parameters"].items() if n.endswith("_order") and v == 2.0)
     fitted = math.hypot(first["parameters"][f"{slot}_a"], first["parameters"][f"{slot}_b"])
     _, a, b = link[0]
