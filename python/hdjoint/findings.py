@@ -203,6 +203,35 @@ def _hypothesis_alternative(h, share: float) -> dict:
                         {n: h.params_after[n] for n in _reported(h.fitted)})
 
 
+def loop_as_the_estimator_runs_it(diag, params: dict) -> dict | None:
+    """A fitted Dahl loop as the estimator FMU runs it: driven by each raw
+    encoder increment, where the diagnosis (against a sensor) drives it with
+    the torsion through the transmission's filter. The compliance torque's
+    held-out error against the sensor without and with the loop, both driven
+    raw. On the independent truth's hysteresis cases the fitted loops switch
+    over less than one encoder count of torsion, and driven raw they made
+    that error worse (docs/diagnosis_measurements.md, "The fitted loop in the
+    estimator FMU")."""
+    from .channels import _compliance_torque
+    if not diag.has_sensor or not params.get("hys_H", 0.0) > 0.0:
+        return None
+    rows = diag.test & np.isfinite(diag.rec.tau_sensor)
+
+    def held_out_rms(p) -> float:
+        error = (_compliance_torque(diag.prep, p, None, sharp=False) - diag.rec.tau_sensor)[rows]
+        return float(np.std(error[np.isfinite(error)]))
+
+    without, with_loop = held_out_rms(dict(params, hys_H=0.0)), held_out_rms(params)
+    out = {"drive": "raw encoder increments (the estimator FMU)", "held_out_rms_without": round(without, 5),
+           "held_out_rms_with": round(with_loop, 5), "change": round(with_loop / without - 1.0, 4)}
+    if with_loop >= without:
+        out["caveat"] = (f"the estimator FMU, driving the loop with raw encoder increments, does not gain from it "
+                         f"(held-out torque error {100 * out['change']:+.1f} %): it switches over "
+                         f"{params['hys_H'] / params['hys_sigma']:.2g} rad of torsion, and each encoder count flips it; the "
+                         "diagnosis fitted it on the torsion through the transmission's filter")
+    return out
+
+
 def finding_document(result, f) -> dict:
     diag, final_params = result.engine, result.params
     out = {"effect": f.effect.id, "kind": f.kind, "p_value": f.p_value, "confidence": f.confidence,
@@ -246,6 +275,10 @@ def finding_document(result, f) -> dict:
         out["evidence"]["seen_on"] = h.seen_on
     out["parameters"] = {n: final_params[n] for n in _reported(f.fitted)}
     out["intervals"] = h.intervals or {n: _interval(diag.last_fit.std, final_params, n) for n in f.fitted}
+    if f.effect.id == "hysteresis":
+        in_estimator = loop_as_the_estimator_runs_it(diag, final_params)
+        if in_estimator:
+            out["in_the_estimator"] = in_estimator
     if f.kind == "ambiguous":
         hypotheses = [h] + f.alternatives
         total = sum(max(x.gain.gain, 0.0) for x in hypotheses) or 1.0

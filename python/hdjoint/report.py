@@ -81,6 +81,8 @@ def _finding_line(f: dict) -> str:
         f"{html.escape(n)} = {_fmt(v)}" + (f" [{_fmt(intervals[n][0])}, {_fmt(intervals[n][1])}]"
                                           if intervals.get(n) else "")
         for n, v in f["parameters"].items())
+    caveat = f.get("in_the_estimator", {}).get("caveat")
+    values += f". <i>Caveat: {html.escape(caveat)}</i>" if caveat else ""
     if f["kind"] == "ambiguous":
         return f"{head}: one of {_one_of(f)}; modelled as {html.escape(f['effect'])}: {values}"
     return f"{head}: {values}"
