@@ -204,31 +204,31 @@ def _hypothesis_alternative(h, share: float) -> dict:
 
 
 def loop_as_the_estimator_runs_it(diag, params: dict) -> dict | None:
-    """A fitted Dahl loop as the estimator FMU runs it: driven by each raw
-    encoder increment, where the diagnosis (against a sensor) drives it with
-    the torsion through the transmission's filter. The compliance torque's
-    held-out error against the sensor without and with the loop, both driven
-    raw. On the independent truth's hysteresis cases the fitted loops switch
-    over less than one encoder count of torsion, and driven raw they made
-    that error worse (docs/diagnosis_measurements.md, "The fitted loop in the
-    estimator FMU")."""
-    from .channels import _compliance_torque
+    """A fitted Dahl loop as the estimator FMU runs it: its compliance model
+    (C++, with its own delay line) on the raw recorded current and encoder
+    angles, where the diagnosis (against a sensor) drives the loop with the
+    torsion through the transmission's filter. The compliance torque's
+    held-out error against the sensor without and with the loop
+    (docs/diagnosis_measurements.md, "The fitted loop in the estimator FMU")."""
     if not diag.has_sensor or not params.get("hys_H", 0.0) > 0.0:
         return None
-    rows = diag.test & np.isfinite(diag.rec.tau_sensor)
+    rec, rows = diag.rec, diag.test & np.isfinite(diag.rec.tau_sensor)
 
     def held_out_rms(p) -> float:
-        error = (_compliance_torque(diag.prep, p, None, sharp=False) - diag.rec.tau_sensor)[rows]
+        native = parameters.for_estimator(p)
+        torque = diag.prep.per_window(lambda i, tm, tl: _core.compliance(native, i, tm, tl)["tau_compliance"],
+                                      rec.i_m, rec.theta_m, rec.theta_l)
+        error = (torque - rec.tau_sensor)[rows]
         return float(np.std(error[np.isfinite(error)]))
 
     without, with_loop = held_out_rms(dict(params, hys_H=0.0)), held_out_rms(params)
-    out = {"drive": "raw encoder increments (the estimator FMU)", "held_out_rms_without": round(without, 5),
+    out = {"drive": "raw encoder angles (the estimator FMU)", "held_out_rms_without": round(without, 5),
            "held_out_rms_with": round(with_loop, 5), "change": round(with_loop / without - 1.0, 4)}
     if with_loop >= without:
-        out["caveat"] = (f"the estimator FMU, driving the loop with raw encoder increments, does not gain from it "
+        out["caveat"] = (f"the estimator FMU, driving the loop with the raw encoder angles, does not gain from it "
                          f"(held-out torque error {100 * out['change']:+.1f} %): it switches over "
-                         f"{params['hys_H'] / params['hys_sigma']:.2g} rad of torsion, and each encoder count flips it; the "
-                         "diagnosis fitted it on the torsion through the transmission's filter")
+                         f"{params['hys_H'] / params['hys_sigma']:.2g} rad of torsion, and the diagnosis fitted it on the "
+                         "torsion through the transmission's filter, which the FMU does not apply")
     return out
 
 
