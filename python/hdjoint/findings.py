@@ -12,7 +12,7 @@ from .calibration import INTERVAL
 from .cannot_tell import cannot_tell
 from .significance import FALSE_DISCOVERY_RATE, NullNoise, benjamini_hochberg, null_z, p_value
 from .signals import regime_filter
-from .structure import RESOLVING_PERIODS, resolves, scan
+from .structure import resolving_travel, scan, unresolved_orders
 
 
 def _rms(x) -> float:
@@ -97,11 +97,11 @@ def _order_record(o, rec) -> dict:
     if o.resolved:
         return {"angle": o.angle, "order": o.order}
     travel = float(np.ptp(getattr(rec, o.angle)))
-    alike = [k for k in range(int(o.order), 41) if not resolves(k, travel)]
+    alike = [k for k in unresolved_orders(o.angle, travel) if k >= o.order]
     return {"angle": o.angle, "order": o.order, "resolved": False,
-            "note": f"{o.angle} travels {travel / (2 * np.pi):.2g} revolution: orders {alike[0]} to {alike[-1]} "
+            "note": f"{o.angle} travels {travel / (2 * np.pi):.2g} revolution: orders {alike[0]:g} to {alike[-1]:g} "
                     f"fit it alike; the lowest the model lacks stands for them (a travel of "
-                    f"{2 * np.pi * RESOLVING_PERIODS / o.order:.2g} rad resolves order {o.order:g})"}
+                    f"{resolving_travel(o.order):.2g} rad resolves order {o.order:g})"}
 
 
 def fit_figures(diag, finding) -> dict:

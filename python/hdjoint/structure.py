@@ -145,9 +145,14 @@ class Order:
 RESOLVING_PERIODS = 1.5
 
 
+def resolving_travel(order: float) -> float:
+    """The travel (rad of an angle) that resolves a ripple of `order` cycles per revolution."""
+    return 2 * np.pi * RESOLVING_PERIODS / order
+
+
 def resolves(order: float, travel: float) -> bool:
     """Whether `travel` (rad of an angle) resolves a ripple of `order` cycles per revolution."""
-    return order * travel >= 2 * np.pi * RESOLVING_PERIODS
+    return travel >= resolving_travel(order)
 
 
 def _order_grid(angle: str) -> list[float]:
@@ -182,12 +187,16 @@ def unresolved_trend(values: np.ndarray, angle: str, through=None) -> np.ndarray
     return np.stack([through(c) for c in columns]) if through is not None else columns
 
 
+def unresolved_orders(angle: str, travel: float) -> list[float]:
+    """The orders of `angle`'s grid that `travel` (rad) does not resolve."""
+    return [k for k in _order_grid(angle) if not resolves(k, travel)]
+
+
 def lowest_unresolved_order(values: np.ndarray, angle: str, exclude=()) -> float | None:
     """The lowest order of `angle`'s grid that the travel does not resolve
     and the model does not have (`exclude`), or None."""
-    travel = float(np.ptp(values))
-    return next((k for k in _order_grid(angle)
-                 if not resolves(k, travel) and all(abs(k - e) > 1e-9 for e in exclude)), None)
+    return next((k for k in unresolved_orders(angle, float(np.ptp(values)))
+                 if all(abs(k - e) > 1e-9 for e in exclude)), None)
 
 
 def unresolved_order(values, residual, fold, train, test, order: float, name: str) -> Order:
