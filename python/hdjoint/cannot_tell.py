@@ -15,6 +15,9 @@ at 4x, Kt at 0.7x). The recording could not tell, and says so:
   - a calibrated constant of the joint (a parameter no effect owns: Kt, Jm,
     Jl, ...) more than ABSORBED_Z tolerances from its nominal value.
 
+  - an effect that would not show at a sourced reference size
+    (detection_limit.py: the smallest size this recording shows).
+
 Each item names what to record to settle it (the effect's `revealed_by`).
 The verdict is not changed (the false-alarm rate on controls is measured on
 the verdict); findings.json carries the list as `cannot_tell` and the
@@ -68,6 +71,14 @@ def absorbed_constants(calibration: dict) -> list[dict]:
     return out
 
 
+def too_small_to_show(limits, said: set[str]) -> list[dict]:
+    """Effects this recording would not show at a sourced reference size (detection_limit.py)."""
+    return [{"effect": x.effect, "why": f"one as large as the reference would not show: {x.sentence()}",
+             "record": EFFECTS[x.effect].revealed_by} for x in limits if x.hides_reference() and x.effect not in said]
+
+
 def cannot_tell(result) -> list[dict]:
     last_round = result.tested[-1] if result.tested else []
-    return unsettled_hypotheses(last_round, result.unexplained) + absorbed_constants(result.calibration)
+    seen = unsettled_hypotheses(last_round, result.unexplained)
+    return (seen + too_small_to_show(result.limits, {x["effect"] for x in seen}) +
+            absorbed_constants(result.calibration))

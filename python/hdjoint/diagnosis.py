@@ -433,6 +433,7 @@ class DiagnosisResult:
     located: list[dict] = field(default_factory=list)
     unexplained: list[dict] = field(default_factory=list)
     orders_not_found: list[dict] = field(default_factory=list)
+    limits: list = field(default_factory=list)  # detection_limit.Limit per effect tested and not accepted
 
     @property
     def beyond_tolerance(self) -> list[Calibrated]:
@@ -1089,6 +1090,7 @@ def diagnose(rec: Recording | list[Recording], nominal: dict[str, float],
 
 
 def _diagnose(rec, nominal, progress, tolerance, workers):
+    from .detection_limit import detection_limits
     from .findings import document, remaining_structure
     diag = Diagnosis(rec, nominal, progress, tolerance, workers)
     calibrated, diag.last_fit = diag.calibrate()
@@ -1098,10 +1100,12 @@ def _diagnose(rec, nominal, progress, tolerance, workers):
     calibration = diag.calibration_of(diag.last_fit, p)
     diag.say("checking what remains")
     resized, unattributed = diag.resized(calibration, p)
+    diag.say("measuring the smallest size of each untold effect this recording would show")
+    limits = detection_limits(diag, p)
     result = DiagnosisResult(diag, dict(diag.nominal), dict(calibrated), p, added + resized,
                              calibration, diag.tested, diag.not_testable, dict(diag.sigma), located,
                              remaining_structure(diag, p) + diag.unconfirmed_structure() + unattributed,
-                             diag.orders_not_found)
+                             diag.orders_not_found, limits)
     doc = document(result)
     if doc["unexplained"]:  # open-library fallback: propose terms for what no named effect explains
         from .open_library import propose_terms

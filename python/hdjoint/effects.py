@@ -51,6 +51,22 @@ def _slots_for_orders(effect: "Effect", p: dict, search) -> tuple[dict, list[str
 
 
 @dataclass(frozen=True)
+class Size:
+    """What sets an effect's size, for the smallest size a recording would
+    show (detection_limit.py): the parameter scaled, how the effect grows
+    with it (Kw: -1, a stiffer bearing twists less), a reference size (the
+    table's defaults for any of the effect's parameters not stated), and the
+    reference's source ("" : a size of the fit's grid, no claim that it is typical)."""
+    parameter: str
+    grows: float = 1.0
+    reference: tuple[tuple[str, float], ...] = ()
+    source: str = ""
+
+
+TABLE_JOINT = "the parameter table's SHD-17-100-class joint"
+
+
+@dataclass(frozen=True)
 class Effect:
     id: str
     part: str                     # "transmission", "motor" or "link"
@@ -92,6 +108,7 @@ class Effect:
     seen_on_torsion: bool = False
     # (fitted parameters, torsion span of the recording in rad) -> why the fit is not this effect, or None
     degenerate: Callable[[dict, float], str | None] = lambda p, span: None
+    size: Size | None = None  # None: no detection limit (terms at angle orders say which orders were seen)
 
     def carries(self) -> tuple[str, ...]:
         """Every model parameter of this effect (for checking the build has them)."""
@@ -188,7 +205,7 @@ EFFECTS: dict[str, Effect] = {e.id: e for e in [
            needs="torque", lookalikes=("stiffness_nonlinearity", "backlash"),
            revealed_by="fast motor accelerations at low load (the wave generator twists with the motor-side "
                        "torque, the flexspline with the link torque)",
-           resizes=("Kw", "Cw")),
+           resizes=("Kw", "Cw"), size=Size("Kw", -1.0, source=TABLE_JOINT)),
     Effect("wave_generator_load", "transmission", ("wg_load",),
            "the wave generator is loaded by the transmitted torque tau/N, not by the motor current Kt*i_m "
            "(the paper's approximation carries friction and inertia into the wave generator's torsion)",
@@ -196,13 +213,14 @@ EFFECTS: dict[str, Effect] = {e.id: e for e in [
            _nonzero("wg_load"), starts=({"wg_load": 1.0}, {"wg_load": 0.5}), needs="speed_reversals",
            lookalikes=("coulomb_friction", "wave_generator_compliance", "hysteresis", "backlash"),
            revealed_by="speed reversals at constant load (friction flips, the transmitted torque does not)",
-           resizes=("wg_load",)),
+           resizes=("wg_load",), size=Size("wg_load", reference=(("wg_load", 1.0),),
+                                            source="the wave generator loaded by the transmitted torque alone")),
     Effect("stiffness_nonlinearity", "transmission", ("Cf",),
            "flexspline stiffening with torque (the catalogue's K1 -> K3)", "atan law of eq. (5) with Cf",
            _nonzero("Cf"), starts=({"Cf": 0.03}, {"Cf": 0.08}, {"Cf": 0.2}), needs="torque",
            lookalikes=("wave_generator_compliance",),
            revealed_by="a wider torque range at slow motion (slow ramps of the load up to the rated torque)",
-           resizes=("Cf", "Kf")),
+           resizes=("Cf", "Kf"), size=Size("Cf", source=TABLE_JOINT + " (K1 -> K3 at T2, catalogue)")),
     Effect("hysteresis", "transmission", ("hys_H", "hys_sigma"),
            "hysteresis of the flexspline: torque depends on the direction of loading (a rate-independent loop)",
            "Dahl hysteresis torque added to the elastic torque (hys_H, hys_sigma)",
@@ -210,30 +228,34 @@ EFFECTS: dict[str, Effect] = {e.id: e for e in [
                                       {"hys_H": 0.8, "hys_sigma": 1e5}),
            needs="torque_reversals", lookalikes=("backlash", "coulomb_friction", "wave_generator_load"),
            revealed_by="slow load reversals of several amplitudes (a loop that grows with amplitude)",
-           stateful=True, resizes=("hys_H", "hys_sigma"), degenerate=_no_loop),
+           stateful=True, resizes=("hys_H", "hys_sigma"), degenerate=_no_loop,
+           size=Size("hys_H", reference=(("hys_H", 0.3),))),
     Effect("backlash", "transmission", ("backlash",),
            "lost motion: a dead zone of torsion around zero torque", "dead zone of width `backlash` on the torsion",
            _nonzero("backlash"), starts=({"backlash": 1e-5}, {"backlash": 4e-5}, {"backlash": 1.5e-4}),
            needs="torque_reversals", lookalikes=("hysteresis", "wave_generator_compliance", "wave_generator_load"),
            revealed_by="a dwell at zero load between slow reversals (a flat of torsion without torque)",
-           resizes=("backlash",), degenerate=_dead_zone_swallowing_the_torsion, uneven_over_folds=True),
+           resizes=("backlash",), degenerate=_dead_zone_swallowing_the_torsion, uneven_over_folds=True,
+           size=Size("backlash", reference=(("backlash", 2.9e-4),), source="lost motion of 1 arcmin (catalogue)")),
     Effect("coulomb_friction", "motor", ("Fc",),
            "Coulomb friction of motor and wave generator", "tau_fm = Fc*tanh(omega_m/omega_fc)",
            _nonzero("Fc"), starts=({"Fc": 0.005}, {"Fc": 0.02}), needs="speed_reversals",
            lookalikes=("hysteresis", "stribeck_friction", "wave_generator_load"),
            revealed_by="constant-speed runs in both directions at several speeds",
-           shape=("omega_fc",), resizes=("Fc", "omega_fc")),
+           shape=("omega_fc",), resizes=("Fc", "omega_fc"), size=Size("Fc", source=TABLE_JOINT)),
     Effect("stribeck_friction", "motor", ("Fs", "omega_s"),
            "Stribeck friction: higher friction at low speed", "(Fc + Fs*exp(-(omega/omega_s)^2))*tanh(...)",
            _nonzero("Fs"), starts=({"Fs": 0.005, "omega_s": 3.0}, {"Fs": 0.01, "omega_s": 15.0},
                                    {"Fs": 0.02, "omega_s": 50.0}),
            needs="low_speed", lookalikes=("coulomb_friction",),
            revealed_by="slow constant speeds (0.5-20 rad/s) held in both directions, not only passed through",
-           resizes=("Fs", "omega_s"), degenerate=_rise_inside_the_switch),
+           resizes=("Fs", "omega_s"), degenerate=_rise_inside_the_switch,
+           size=Size("Fs", reference=(("Fs", 0.01),))),
     Effect("viscous_friction", "motor", ("Bm",),
            "viscous friction proportional to motor speed", "Bm*omega_m", _nonzero("Bm"),
            starts=({"Bm": 2e-5}, {"Bm": 1e-4}), needs="speed", lookalikes=("time_delay",),
-           revealed_by="constant high speeds (no acceleration, so no delay shows)", resizes=("Bm",)),
+           revealed_by="constant high speeds (no acceleration, so no delay shows)", resizes=("Bm",),
+           size=Size("Bm", source=TABLE_JOINT)),
     Effect("cogging", "motor", (),  # the order comes from the order search
            "motor cogging / torque ripple periodic in the motor angle",
            "cog_a*cos(cog_order*theta_m) + cog_b*sin(cog_order*theta_m) added to the motor torque",
@@ -245,7 +267,8 @@ EFFECTS: dict[str, Effect] = {e.id: e for e in [
            "a time delay between the current measurement and the encoders", "current realigned by i_delay",
            _nonzero("i_delay"), starts=({"i_delay": 1e-3}, {"i_delay": 3e-3}, {"i_delay": 8e-3}),
            needs="current_dynamics", lookalikes=("viscous_friction",),
-           revealed_by="fast current steps at standstill", resizes=("i_delay",)),
+           revealed_by="fast current steps at standstill", resizes=("i_delay",),
+           size=Size("i_delay", reference=(("i_delay", 1e-3),))),
     # Both forms of a warm-up in one fit: the torque constant's (it scales with
     # the current) and the friction's (it scales with the motion); which one
     # carries the drift is read from their fitted sizes and intervals.
@@ -260,17 +283,20 @@ EFFECTS: dict[str, Effect] = {e.id: e for e in [
            needs="duration", uneven_over_folds=True,
            revealed_by="the same motion repeated from a cold start for several minutes (at high current for the "
                        "torque constant, at high speed for the friction)",
-           resizes=("Kt_warmup", "Fc_drift")),
+           resizes=("Kt_warmup", "Fc_drift"),
+           size=Size("Kt_warmup", reference=(("Kt_warmup", -0.03), ("Kt_warmup_tc", 10.0)),
+                     source="a 30 K warm-up of NdFeB magnets (-0.1 %/K)")),
     Effect("gravity_load", "link", ("mgl",),
            "gravity (or payload) torque on the link", "mgl*sin(theta_l)", _nonzero("mgl"),
            starts=({"mgl": 1.0}, {"mgl": -1.0}), needs="link_travel",
-           revealed_by="slow link motion over a wide angle", resizes=("mgl",)),
+           revealed_by="slow link motion over a wide angle", resizes=("mgl",), size=Size("mgl", source=TABLE_JOINT)),
     # Its smoothing omega_fl is fitted with it: a link friction that switches at
     # the wrong speed leaves structure at low link speed on the next recording.
     Effect("link_friction", "link", ("Fl", "omega_fl"),
            "friction on the link side (output bearing, seals)", "Fl*tanh(omega_l/omega_fl)", _nonzero("Fl"),
            starts=({"Fl": 0.05, "omega_fl": 0.01}, {"Fl": 0.3, "omega_fl": 0.01}, {"Fl": 0.3, "omega_fl": 0.003}),
-           needs="link_reversals", revealed_by="link reversals at low motor current", resizes=("Fl", "omega_fl")),
+           needs="link_reversals", revealed_by="link reversals at low motor current", resizes=("Fl", "omega_fl"),
+           size=Size("Fl", reference=(("Fl", 0.05),))),
 ]}
 
 # Parameters calibrated whenever their part of the model is fitted: the

@@ -306,6 +306,7 @@ def document(result) -> dict:
         "false_discovery_rate": FALSE_DISCOVERY_RATE,
         "unexplained": result.unexplained,
         "cannot_tell": cannot_tell(result),
+        "detection_limits": [x.as_dict() for x in result.limits],
         "located": result.located,
         "noise": {c: round(s, 6) for c, s in result.sigma.items()},
         "estimator": estimator_comparison(diag, result.params),

@@ -150,6 +150,20 @@ def _validation_section(entries: list[dict]) -> str:
             + _extrapolation_notes(entries))
 
 
+def _limits_section(limits: list[dict]) -> str:
+    """The smallest size of each effect tested and not found that this recording would have shown."""
+    rows = [(x["effect"], f"{x['parameter']} = {_fmt(x['reference'])} {x['unit']}"
+             + (f" ({x['reference_source']})" if x.get("reference_source") else ""),
+             "not even at 1024 times that" if x["limit"] is None else
+             f"{x['parameter']} = {_fmt(x['limit'])} {x['unit']} ({_fmt(x['times_reference'])} times the reference)")
+            for x in limits]
+    return ("<h2>How large an effect this recording would show</h2><p>Each effect tested and not found, planted "
+            "into the corrected model at sizes around a reference; what calibration would take of it removed, the "
+            "rest judged by the diagnosis's own test. An effect smaller than its limit may be present unseen; "
+            "the limit is a lower bound (the effect's fit is taken to find its exact terms).</p>"
+            + _table(rows, ["effect", "reference size", "smallest size shown"]))
+
+
 def _extrapolation_notes(entries: list[dict]) -> str:
     """A sentence per recording that leaves the fitted operating range: its figures test the model's form there."""
     notes = [f"<li><b>{html.escape(str(v['path']))}</b>: {html.escape(q['warning'])}</li>"
@@ -249,6 +263,8 @@ def build(result, doc: dict) -> str:
         sections.append("<h2>Unexplained structure</h2>" + _table(
             [(u["channel"], u["feature"], u["held_out_gain"], u["largest_at"]) for u in doc["unexplained"]],
             ["channel", "feature", "held-out gain", "largest at"]))
+    if doc.get("detection_limits"):
+        sections.append(_limits_section(doc["detection_limits"]))
     if doc["not_testable"]:
         sections.append("<h2>Not testable on this recording</h2>" + _table(
             [(n["effect"], n["reason"]) for n in doc["not_testable"]], ["effect", "why"]))

@@ -6,15 +6,16 @@ from types import SimpleNamespace
 
 from hdjoint.calibration import Calibrated, Prior
 from hdjoint.cannot_tell import cannot_tell
+from hdjoint.detection_limit import Limit
 
 
 def _tested(effect, gain, z, dbic, accepted=False, p=0.5):
     return {"effect": effect, "held_out_gain": gain, "z": z, "p_value": p, "delta_bic": dbic, "accepted": accepted}
 
 
-def _result(last_round, calibration=(), unexplained=()):
+def _result(last_round, calibration=(), unexplained=(), limits=()):
     return SimpleNamespace(tested=[last_round], unexplained=list(unexplained),
-                           calibration={c.name: c for c in calibration})
+                           calibration={c.name: c for c in calibration}, limits=list(limits))
 
 
 def test_a_sweeps_coulomb_friction_and_its_absorbed_inertia_are_said():
@@ -49,3 +50,26 @@ def test_a_degenerate_fit_says_it_is_not_the_effect():
     said = cannot_tell(_result([h]))
     assert [x["effect"] for x in said] == ["stribeck_friction"]
     assert "not the effect: " + why in said[0]["why"] and "fold by fold" not in said[0]["why"]
+
+
+def _limit(effect, parameter, reference, limit, factor, grows=1.0, source="a catalogue"):
+    return Limit(effect, parameter, reference, limit, factor, grows, source)
+
+
+def test_an_effect_hidden_at_its_sourced_reference_size_is_said_with_its_limit():
+    hidden = _limit("wave_generator_compliance", "Kw", 10.0, 5.0, 2.0, grows=-1.0)
+    shown = _limit("coulomb_friction", "Fc", 0.015, 0.003, 0.2)
+    never = _limit("stiffness_nonlinearity", "Cf", 0.0645, None, None)
+    unsourced = _limit("hysteresis", "hys_H", 0.3, 0.6, 2.0, source="")
+    said = cannot_tell(_result([], limits=[hidden, shown, never, unsourced]))
+    assert [x["effect"] for x in said] == ["wave_generator_compliance", "stiffness_nonlinearity"]
+    assert "Kw = 5 N.m/rad (2 times the size at Kw = 10, a catalogue)" in said[0]["why"]
+    assert "not show even at 1024 times" in said[1]["why"]
+    assert all(x["record"] for x in said)
+
+
+def test_an_effect_the_round_saw_is_not_said_again_for_its_limit():
+    seen = _tested("wave_generator_compliance", 0.05, 1.0, -50.0)
+    hidden = _limit("wave_generator_compliance", "Kw", 10.0, 5.0, 2.0, grows=-1.0)
+    said = cannot_tell(_result([seen], limits=[hidden]))
+    assert len(said) == 1 and "explains 5.0 %" in said[0]["why"]
