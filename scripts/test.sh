@@ -27,4 +27,5 @@ ctest --test-dir build/sanitize --output-on-failure
 LD_PRELOAD="$(g++ -print-file-name=libasan.so)" ASAN_OPTIONS=detect_leaks=0 \
     python3 scripts/run_sanitized_fmus.py build/sanitize
 
-python3 -m pytest -q tests "$@"
+# Two workers, whole files each (a module's fixtures, e.g. a diagnosis a file's tests share, are made once).
+python3 -m pytest -q -n 2 --dist loadfile tests "$@"

@@ -71,8 +71,8 @@ class Limit:
 
     def sentence(self) -> str:
         if self.limit is None:
-            return (f"it would not show even at {LARGEST:g} times the reference size "
-                    f"({self.parameter} = {self.reference:.3g})")
+            return (f"it would not show at any size up to {LARGEST:g} times the reference "
+                    f"({self.parameter} = {self.reference:.3g}) within the parameter's valid range")
         unit = parameters.table()[self.parameter].unit
         return (f"it shows only from a size of {self.parameter} = {self.limit:.3g} {unit} ({self.factor:.2g} "
                 f"times the size at {self.parameter} = {self.reference:.3g}"
@@ -96,6 +96,13 @@ def reference_set(effect: Effect, p: dict) -> dict:
 def at_size(effect: Effect, reference: dict, factor: float) -> dict:
     name = effect.size.parameter
     return dict(reference, **{name: reference[name] * factor ** effect.size.grows})
+
+
+def in_range(effect: Effect, reference: dict, factor: float) -> bool:
+    """The effect at this size is a valid parameter set (backlash stops at 0.01 rad, a warm-up at -50 %)."""
+    name = effect.size.parameter
+    info = parameters.table()[name]
+    return info.min <= at_size(effect, reference, factor)[name] <= info.max
 
 
 class _Planting:
@@ -166,7 +173,7 @@ def smallest_shown(diag, effect: Effect, p: dict, shared: dict | None = None) ->
             found /= COARSE
     else:
         factor = COARSE
-        while factor <= LARGEST and found is None:
+        while factor <= LARGEST and in_range(effect, planting.reference, factor) and found is None:
             found = factor if planting.shown(factor) else None
             factor *= COARSE
     if found is None:

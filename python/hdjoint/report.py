@@ -154,7 +154,7 @@ def _limits_section(limits: list[dict]) -> str:
     """The smallest size of each effect tested and not found that this recording would have shown."""
     rows = [(x["effect"], f"{x['parameter']} = {_fmt(x['reference'])} {x['unit']}"
              + (f" ({x['reference_source']})" if x.get("reference_source") else ""),
-             "not even at 1024 times that" if x["limit"] is None else
+             "none up to 1024 times that (or the parameter's valid range)" if x["limit"] is None else
              f"{x['parameter']} = {_fmt(x['limit'])} {x['unit']} ({_fmt(x['times_reference'])} times the reference)")
             for x in limits]
     return ("<h2>How large an effect this recording would show</h2><p>Each effect tested and not found, planted "

@@ -64,7 +64,7 @@ def test_an_effect_hidden_at_its_sourced_reference_size_is_said_with_its_limit()
     said = cannot_tell(_result([], limits=[hidden, shown, never, unsourced]))
     assert [x["effect"] for x in said] == ["wave_generator_compliance", "stiffness_nonlinearity"]
     assert "Kw = 5 N.m/rad (2 times the size at Kw = 10, a catalogue)" in said[0]["why"]
-    assert "not show even at 1024 times" in said[1]["why"]
+    assert "not show at any size up to 1024 times" in said[1]["why"]
     assert all(x["record"] for x in said)
 
 
