@@ -38,10 +38,10 @@ import numpy as np
 
 from . import parameters
 from .effects import Effect
+from .diagnosis import MIN_GAIN, steady_over_folds
 from .significance import FALSE_DISCOVERY_RATE, null_gain, null_z, p_value
 from .structure import held_out_gain_sq
 
-MIN_GAIN = 0.003  # a hypothesis's acceptance gain (diagnosis.Hypothesis._held_out_evidence)
 COARSE = 2.0      # the size grid's step, then refined by halving its exponent twice
 SMALLEST, LARGEST = 1.0 / 1024.0, 1024.0  # sizes searched, as multiples of the reference
 
@@ -156,8 +156,7 @@ class _Planting:
             return False
         if self.effect.uneven_over_folds:
             return p_value(gain.gain, self.null) <= FALSE_DISCOVERY_RATE
-        steady = gain.z > 3.0 and gain.folds_improved >= 0.7 * gain.folds_compared
-        return steady and p_value(gain.z, self.null) <= FALSE_DISCOVERY_RATE
+        return steady_over_folds(gain) and p_value(gain.z, self.null) <= FALSE_DISCOVERY_RATE
 
 
 def smallest_shown(diag, effect: Effect, p: dict, shared: dict | None = None) -> Limit:

@@ -76,6 +76,13 @@ UNCONFIRMED_GAIN = 0.5
 # A link order the travel does not resolve is tried when it explains this share
 # of a channel's held-out residual (an order's significant gain, structure.HeldOutGain).
 UNRESOLVED_GAIN = 0.005
+# A hypothesis's held-out gain must exceed this share of the residual (with its other evidence).
+MIN_GAIN = 0.003
+
+
+def steady_over_folds(gain) -> bool:
+    """A stationary effect helps most held-out folds: z > 3 over them, >= 70 % of them improved."""
+    return gain.z > 3.0 and gain.folds_improved >= 0.7 * gain.folds_compared
 
 
 class DiagnosisError(ValueError):
@@ -376,7 +383,7 @@ class Hypothesis:
         return self.p_value > FALSE_DISCOVERY_RATE and self.gain.gain >= UNCONFIRMED_GAIN and self._held_out_evidence()
 
     def _held_out_evidence(self) -> bool:
-        return (not self.degenerate and self.gain.gain > 0.003 and self._steady_over_folds() and self.delta_bic < -10.0
+        return (not self.degenerate and self.gain.gain > MIN_GAIN and self._steady_over_folds() and self.delta_bic < -10.0
                 and self.channel_ratio() <= 1.0)
 
     def channel_ratio(self) -> float:
@@ -392,7 +399,7 @@ class Hypothesis:
         and its test" and "Reversals judged pooled", for the false alarms this gives on controls)."""
         if self.z_against_null is not None:
             return True
-        return self.gain.z > 3.0 and self.gain.folds_improved >= 0.7 * self.gain.folds_compared
+        return steady_over_folds(self.gain)
 
 
 @dataclass
@@ -782,7 +789,7 @@ class Diagnosis:
         for o, adjusted in zip(tried, benjamini_hochberg([o.p_raw for o in tried])):
             o.p_value = adjusted
         passing = [o for o in sorted(tried, key=lambda o: -o.gain.gain)
-                   if o.p_value <= FALSE_DISCOVERY_RATE and o.gain.gain > 0.003 and o.gain.z > 3.0]
+                   if o.p_value <= FALSE_DISCOVERY_RATE and o.gain.gain > MIN_GAIN and o.gain.z > 3.0]
         trial, names, chosen = fill_slots(effect, p, passing, limit=2)
         if not chosen:
             self._orders_seen = [Order(o.angle, o.order, o.amplitude, o.gain, float("nan"), TORSION_VIEW)
@@ -989,7 +996,7 @@ class Diagnosis:
             p_value = float(norm.sf(gain.z))
             self.say(f"{effect_id}: {', '.join(edge)} beyond tolerance; held to it, held-out gain "
                      f"{100 * gain.gain:.2f} % (z = {gain.z:.1f})")
-            if not (gain.gain > 0.003 and p_value <= FALSE_DISCOVERY_RATE / max(1, len(moved)) and gain.z > 3.0):
+            if not (gain.gain > MIN_GAIN and p_value <= FALSE_DISCOVERY_RATE / max(1, len(moved)) and gain.z > 3.0):
                 continue
             if is_unresolved:
                 unattributed += self._unattributed_move(EFFECTS[effect_id], params, unresolved, gain, p_value)
