@@ -38,6 +38,7 @@ import numpy as np
 
 from . import parameters
 from .effects import Effect
+from .forked import map_forked
 from .diagnosis import MIN_GAIN, steady_over_folds
 from .significance import FALSE_DISCOVERY_RATE, null_gain, null_z, p_value
 from .structure import held_out_gain_sq
@@ -187,11 +188,9 @@ def smallest_shown(diag, effect: Effect, p: dict, shared: dict | None = None) ->
 
 
 def detection_limits(diag, p: dict) -> list[Limit]:
-    """The limit of each effect the last round tested and did not accept."""
-    out, shared = [], {}
-    for h in diag.last_round:
-        effect = h.effect
-        if h.accepted() or effect.order_angles or effect.size is None:
-            continue
-        out.append(smallest_shown(diag, effect, p, shared))
-    return out
+    """The limit of each effect the last round tested and did not accept,
+    the effects side by side in forked processes (forked.py: the same limits)."""
+    effects = [h.effect for h in diag.last_round
+               if not h.accepted() and not h.effect.order_angles and h.effect.size is not None]
+    shared: dict = {}  # in one process, the effects of a part share the anchors' Jacobian
+    return map_forked(lambda i: smallest_shown(diag, effects[i], p, shared), len(effects), diag.workers)
