@@ -74,10 +74,16 @@ class Limit:
         if self.limit is None:
             return (f"it would not show at any size up to {LARGEST:g} times the reference "
                     f"({self.parameter} = {self.reference:.3g}) within the parameter's valid range")
-        unit = parameters.table()[self.parameter].unit
-        return (f"it shows only from a size of {self.parameter} = {self.limit:.3g} {unit} ({self.factor:.2g} "
+        unit = _unit(self.parameter)
+        return (f"it shows only from a size of {self.parameter} = {self.limit:.3g}{unit} ({self.factor:.2g} "
                 f"times the size at {self.parameter} = {self.reference:.3g}"
                 f"{', ' + self.sourced if self.sourced else ''})")
+
+
+def _unit(name: str) -> str:
+    """' N.m' for a sentence; nothing for a ratio (unit "1")."""
+    unit = parameters.table()[name].unit
+    return "" if unit == "1" else f" {unit}"
 
 
 def _rounded(x: float | None) -> float | None:

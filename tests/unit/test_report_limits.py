@@ -1,0 +1,16 @@
+"""The report's table of detection limits (report._limits_section) reads as
+sentences: units where a parameter has one, none for a ratio, and a limit
+the search never reached said in words."""
+from hdjoint.report import _limits_section
+
+
+def test_limits_read_with_units_and_a_missing_limit_in_words():
+    page = _limits_section([
+        {"effect": "thermal_drift", "parameter": "Kt_warmup", "unit": "1", "reference": -0.03, "limit": -0.1,
+         "times_reference": 3.4},
+        {"effect": "wave_generator_compliance", "parameter": "Kw", "unit": "N.m/rad", "reference": 10.0,
+         "limit": None, "times_reference": None, "reference_source": "the table's joint"}])
+    assert "<td>Kt_warmup = -0.1 (3.4 times the reference)</td>" in page
+    assert "Kw = 10 N.m/rad (the table&#x27;s joint)" in page
+    assert "none up to 1024 times that" in page
+    assert "{" not in page and "None" not in page
