@@ -424,6 +424,10 @@ class Finding:
     def orders(self) -> list[Order]:
         return self.hypothesis.orders if self.hypothesis else []
 
+    def named(self) -> list[str]:
+        """The effect and its look-alikes: what this finding names."""
+        return [self.effect.id] + [h.effect.id for h in self.alternatives]
+
 
 @dataclass
 class DiagnosisResult:
@@ -492,6 +496,7 @@ class Diagnosis:
         self._orders_seen: list[Order] = []
         self.tested: list[list[dict]] = []  # every hypothesis tried, per round (evidence for the report)
         self.last_round: list[Hypothesis] = []  # the hypotheses of the round that ended the selection
+        self.last_candidates: list[Effect] = []  # that round's effects, those without a hypothesis too (no order found)
         self._correlation: tuple | None = None  # (parameters, length), see _correlation_length
 
     def shown_residual(self, channel: Channel, p: dict) -> np.ndarray:
@@ -606,12 +611,16 @@ class Diagnosis:
             self._update_noise(p)
         return p, fit
 
-    def order_search(self, p, part: str, channels: list[Channel], angles: tuple[str, ...]) -> list[Order]:
+    def order_search(self, p, part: str, channels: list[Channel], angles: tuple[str, ...],
+                     added: dict[str, np.ndarray] | None = None) -> list[Order]:
         """Orders of `angles` the residuals of `channels` carry, strongest first
         (orders the nominal model already has at that angle excluded). Every
         channel of the part is searched: on LARA8 the kinematic error is most
         of the link channel's residual (0.7 N.m) and 5 % of the motor
-        channel's (14 N.m of motor-side mismatch, broadband in the angle)."""
+        channel's (14 N.m of motor-side mismatch, broadband in the angle).
+        `added`: a residual added to each named channel's (an effect planted
+        by detection_limit.py)."""
+        added = added or {}
         smoothed = self.prep.kin.smooth if part in SMOOTHED_PARTS else None
         existing = eq7_orders(p) if part == "transmission" else {}
         found: dict[tuple[str, float], Order] = {}
@@ -626,7 +635,7 @@ class Diagnosis:
         for channel in channels:
             # Not the fit's residual, 0 where the channel is blind: a ripple's
             # prediction there counted as error (and a fold of rest, 0/0, as -1e295).
-            r = self.shown_residual(channel, p)
+            r = self.shown_residual(channel, p) + added.get(channel.name, 0.0)
             for angle, (values, through, orders, trend) in searched.items():
                 seen = []
                 for o in order_search(values, r, self.fold, self.train, self.test, orders, existing.get(angle, ()),
@@ -635,10 +644,10 @@ class Diagnosis:
                         found[o.angle, o.order] = replace(o, channel=channel.name)
                 self._orders_seen += [replace(o, channel=channel.name) for o in seen]
         if not found and "theta_l" in searched:
-            return self._unresolved_link_order(p, channels, existing.get("theta_l", ()))
+            return self._unresolved_link_order(p, channels, existing.get("theta_l", ()), added)
         return sorted(found.values(), key=lambda o: -o.gain.gain)
 
-    def _unresolved_link_order(self, p, channels: list[Channel], existing) -> list[Order]:
+    def _unresolved_link_order(self, p, channels: list[Channel], existing, added: dict) -> list[Order]:
         """With no resolved order, the lowest link order the model lacks and the
         travel does not resolve, in the channel it explains best, when it
         explains more than UNRESOLVED_GAIN there held out. The circular
@@ -650,8 +659,9 @@ class Diagnosis:
         order = lowest_unresolved_order(self.rec.theta_l, "theta_l", existing)
         if order is None:
             return []
-        tried = [replace(unresolved_order(self.rec.theta_l, self.shown_residual(c, p), self.fold, self.train,
-                                          self.test, order, "theta_l"), channel=c.name) for c in channels]
+        tried = [replace(unresolved_order(self.rec.theta_l, self.shown_residual(c, p) + added.get(c.name, 0.0),
+                                          self.fold, self.train, self.test, order, "theta_l"), channel=c.name)
+                 for c in channels]
         best = max(tried, key=lambda o: o.gain.gain)
         self._orders_seen += tried
         return [best] if best.gain.gain > UNRESOLVED_GAIN else []
@@ -775,21 +785,7 @@ class Diagnosis:
         motor-side mismatch and 115 N.m of gravity the 4 s jog cannot confirm."""
         torsion = torsion_less_kinematic(self.prep, p)
         nuisance = torsion_nuisances(np.nan_to_num(self.reference_torque(p)), self.rec.theta_l)
-        free = {a for s, a in effect.slots if not slot_on(p, s)}
-        modelled = {a: eq7_orders(p).get(a, ()) + tuple(p[f"{s}_order"] for s, angle in effect.slots
-                                                         if angle == a and slot_on(p, s)) for a in effect.order_angles}
-        tried = []
-        for angle in effect.order_angles:
-            values = getattr(self.rec, angle)
-            if angle not in free or (angle == "theta_m" and np.ptp(values) < MIN_REVOLUTIONS * 2 * math.pi):
-                continue
-            orders = [k for k in candidate_orders(angle, np.ptp(values))
-                      if all(abs(k - e) > 1e-9 for e in modelled[angle])]
-            tried += order_evidence(torsion, nuisance, values, orders, self.fold, self.train, self.test, angle)
-        for o, adjusted in zip(tried, benjamini_hochberg([o.p_raw for o in tried])):
-            o.p_value = adjusted
-        passing = [o for o in sorted(tried, key=lambda o: -o.gain.gain)
-                   if o.p_value <= FALSE_DISCOVERY_RATE and o.gain.gain > MIN_GAIN and o.gain.z > 3.0]
+        tried, passing = self.torsion_orders(effect, p, torsion, nuisance, effect.order_angles)
         trial, names, chosen = fill_slots(effect, p, passing, limit=2)
         if not chosen:
             self._orders_seen = [Order(o.angle, o.order, o.amplitude, o.gain, float("nan"), TORSION_VIEW)
@@ -817,6 +813,27 @@ class Diagnosis:
         orders = [Order(o.angle, o.order, o.amplitude, o.gain, float("nan"), TORSION_VIEW) for _, o in chosen]
         return Hypothesis(effect, p, trial, names, joint.gain, float(dbic), orders, pooled_ratio=pooled,
                           p_raw=min(o.p_value for _, o in chosen), seen_on=TORSION_VIEW, intervals=intervals)
+
+    def torsion_orders(self, effect: Effect, p: dict, torsion: np.ndarray, nuisance: np.ndarray,
+                       angles: tuple[str, ...]) -> tuple[list, list]:
+        """Each order of `angles` the model lacks, tried on the torsion
+        (Benjamini-Hochberg over them all); and those that pass, strongest first."""
+        free = {a for s, a in effect.slots if not slot_on(p, s)}
+        modelled = {a: eq7_orders(p).get(a, ()) + tuple(p[f"{s}_order"] for s, angle in effect.slots
+                                                         if angle == a and slot_on(p, s)) for a in angles}
+        tried = []
+        for angle in angles:
+            values = getattr(self.rec, angle)
+            if angle not in free or (angle == "theta_m" and np.ptp(values) < MIN_REVOLUTIONS * 2 * math.pi):
+                continue
+            orders = [k for k in candidate_orders(angle, np.ptp(values))
+                      if all(abs(k - e) > 1e-9 for e in modelled[angle])]
+            tried += order_evidence(torsion, nuisance, values, orders, self.fold, self.train, self.test, angle)
+        for o, adjusted in zip(tried, benjamini_hochberg([o.p_raw for o in tried])):
+            o.p_value = adjusted
+        passing = [o for o in sorted(tried, key=lambda o: -o.gain.gain)
+                   if o.p_value <= FALSE_DISCOVERY_RATE and o.gain.gain > MIN_GAIN and o.gain.z > 3.0]
+        return tried, passing
 
     def _torsion_span(self, p: dict) -> float:
         """The torsion of the recording (5-95 %), rad: the smaller of what the
@@ -897,6 +914,7 @@ class Diagnosis:
             self._noise = self._null_noise(p)
             self._correlation_length(p)  # here, once: the forked fits of the round inherit it
             tried = self._try_all(candidates, p)
+            self.last_candidates = list(candidates)
             for h, adjusted in zip(tried, benjamini_hochberg([h.p_raw for h in tried])):
                 h.p_value = adjusted
             tried.sort(key=lambda h: -h.gain.gain)
@@ -1108,7 +1126,7 @@ def _diagnose(rec, nominal, progress, tolerance, workers):
     diag.say("checking what remains")
     resized, unattributed = diag.resized(calibration, p)
     diag.say("measuring the smallest size of each untold effect this recording would show")
-    limits = detection_limits(diag, p)
+    limits = detection_limits(diag, p, {e for f in added + resized for e in f.named()})
     result = DiagnosisResult(diag, dict(diag.nominal), dict(calibrated), p, added + resized,
                              calibration, diag.tested, diag.not_testable, dict(diag.sigma), located,
                              remaining_structure(diag, p) + diag.unconfirmed_structure() + unattributed,

@@ -56,7 +56,9 @@ class Size:
     show (detection_limit.py): the parameter scaled, how the effect grows
     with it (Kw: -1, a stiffer bearing twists less), a reference size (the
     table's defaults for any of the effect's parameters not stated), and the
-    reference's source ("" : a size of the fit's grid, no claim that it is typical)."""
+    reference's source ("" : a size of the fit's grid, no claim that it is typical).
+    For an effect at angle orders the parameter is an order slot's amplitude
+    and the reference states the slot's order: it is planted at that one order."""
     parameter: str
     grows: float = 1.0
     reference: tuple[tuple[str, float], ...] = ()
@@ -108,7 +110,7 @@ class Effect:
     seen_on_torsion: bool = False
     # (fitted parameters, torsion span of the recording in rad) -> why the fit is not this effect, or None
     degenerate: Callable[[dict, float], str | None] = lambda p, span: None
-    size: Size | None = None  # None: no detection limit (terms at angle orders say which orders were seen)
+    size: Size | None = None  # None: no detection limit
 
     def carries(self) -> tuple[str, ...]:
         """Every model parameter of this effect (for checking the build has them)."""
@@ -197,7 +199,11 @@ EFFECTS: dict[str, Effect] = {e.id: e for e in [
            revealed_by="a slow sweep of the motor over many revolutions at constant, low load",
            resizes=KINEMATIC_EQ7, order_angles=("theta_m", "theta_l"),
            slots=(("ke_m1", "theta_m"), ("ke_m2", "theta_m"), ("ke_l1", "theta_l"), ("ke_l2", "theta_l")),
-           candidates=_slots_for_orders, seen_on_torsion=True),
+           candidates=_slots_for_orders, seen_on_torsion=True,
+           # Planted at the lowest link order beyond eq. (7), a ripple of 1 arcmin peak to peak.
+           size=Size("ke_l1_a", reference=(("ke_l1_order", 2.0), ("ke_l1_a", 1.45e-4)),
+                     source="a ripple of 1 arcmin peak to peak, the transmission accuracy of Harmonic Drive "
+                            "gears (catalogue)")),
     Effect("wave_generator_compliance", "transmission", ("Kw", "Cw"),
            "wave generator (bearing and plug) compliance, eq. (4)", "wg(tau) with Kw, Cw",
            lambda p: p.get("Kw", 1e9) < 1e8, starts=({"Kw": 3.0, "Cw": 0.0}, {"Kw": 10.0, "Cw": 10.0},

@@ -156,7 +156,8 @@ def _unit(x: dict) -> str:
 
 def _limits_section(limits: list[dict]) -> str:
     """The smallest size of each effect tested and not found that this recording would have shown."""
-    rows = [(x["effect"], f"{x['parameter']} = {_fmt(x['reference'])}{_unit(x)}"
+    rows = [(x["effect"] + "".join(f" at {angle} order {_fmt(order)}" for angle, order in x.get("orders", [])),
+             f"{x['parameter']} = {_fmt(x['reference'])}{_unit(x)}"
              + (f" ({x['reference_source']})" if x.get("reference_source") else ""),
              "none up to 1024 times that (or the parameter's valid range)" if x["limit"] is None else
              f"{x['parameter']} = {_fmt(x['limit'])}{_unit(x)} ({_fmt(x['times_reference'])} times the reference)")
