@@ -14,3 +14,14 @@ def test_limits_read_with_units_and_a_missing_limit_in_words():
     assert "Kw = 10 N.m/rad (the table&#x27;s joint)" in page
     assert "none up to 1024 times that" in page
     assert "{" not in page and "None" not in page
+
+
+def test_a_ripple_limit_names_its_order_in_the_table_and_in_words():
+    from hdjoint.detection_limit import Limit
+    limit = Limit("kinematic_error", "ke_l1_a", 1.45e-4, 3.45e-4, 2.38, 1.0, "1 arcmin (catalogue)",
+                  at=("theta_l", 2.0))
+    doc = limit.as_dict()
+    assert doc["orders"] == [["theta_l", 2.0]]
+    assert "at theta_l order 2, it shows only from a size of ke_l1_a = 0.000345 rad" in limit.sentence()
+    page = _limits_section([doc])
+    assert "<td>kinematic_error at theta_l order 2</td>" in page and "ke_l1_a = 0.000345 rad" in page
