@@ -52,7 +52,7 @@ def test_a_link_ripple_below_the_limit_is_missed_and_one_past_it_shows():
 def test_without_a_torque_sensor_the_limit_is_judged_on_the_torsion():
     joint = draw(next(c for c in CONTROL_CASES if c.name == "control on sweep"), 0)
     rec = dataclasses.replace(record(joint, 0), tau_sensor=None)
-    result, doc = diagnose(rec, joint.nominal, workers=1)
+    result, doc = diagnose(rec, joint.nominal)
     assert doc["verdict"] == "consistent", doc["findings"]
     limit = smallest_shown(result.engine, EFFECTS["kinematic_error"], result.params)
     assert limit.at == ("theta_l", 2.0) and limit.limit is not None
