@@ -25,11 +25,13 @@ and the diagnosis's own test is run on what it would add:
 An effect at angle orders (the kinematic error) is planted at the one order
 its Size states, in a free slot, and the calibrated terms of eq. (7) join
 what calibration takes: over a short travel, link order 1 takes most of a
-link order 2 (the independent truth's, 3.6e-5 rad, came out `consistent` on
-a multisine and on a sweep). Without a torque sensor it is judged on the
-encoders' torsion, as the diagnosis judges its orders (torsion_orders.py):
-held-out gain, z > 3 and p against that view's null, at that one order
-(no correction over the orders a search would try: a lower bound again).
+link order 2 (the independent truth's, 4e-5 rad, came out `consistent` on
+a multisine and on a sweep). It shows when the diagnosis's order search,
+run on the residual with what is left of it, finds an order of its angle
+and the test above passes; or when calibration would move a term of eq.
+(7) from within its tolerance to beyond it (the diagnosis reports that
+move). Without a torque sensor the orders are judged on the encoders'
+torsion, as the diagnosis judges them (Diagnosis.torsion_orders).
 
 The smallest such size (searched from the reference down or up by factors
 of 2 over 2^-10 .. 2^10, refined to 2^(1/4)) is the recording's detection limit for that effect. Idealised: the
@@ -45,13 +47,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import parameters
+from .calibration import RESIZE_Z
+from .channels import torsion_less_kinematic
+from .diagnosis import MIN_GAIN, steady_over_folds
 from .effects import Effect, slot_on
 from .forked import map_forked
-from .calibration import RESIZE_Z
-from .diagnosis import MIN_GAIN, steady_over_folds
 from .significance import FALSE_DISCOVERY_RATE, null_gain, null_z, p_value
 from .structure import held_out_gain_sq
-from .channels import torsion_less_kinematic
 from .torsion_orders import nuisances as torsion_nuisances
 
 COARSE = 2.0      # the size grid's step, then refined by halving its exponent twice
@@ -110,6 +112,12 @@ def planted_slot(effect: Effect) -> tuple[str, str] | None:
     return next(((slot, angle) for slot, angle in effect.slots if effect.size.parameter.startswith(slot + "_")), None)
 
 
+def _planted_at(effect: Effect, reference: dict) -> tuple[str, float] | None:
+    """(angle, order) the effect is planted at, or None for an effect not at angle orders."""
+    slot = planted_slot(effect)
+    return (slot[1], reference[f"{slot[0]}_order"]) if slot else None
+
+
 def reference_set(effect: Effect, p: dict) -> dict:
     """`p` with the effect at its reference size: the stated values, and the
     table's defaults for the rest of its parameters."""
@@ -149,7 +157,7 @@ class _Planting:
         self.reference = reference_set(effect, p)
         # The null: the effect's own parameters and the anchors, linearised at the reference size.
         slot = planted_slot(effect)
-        self.at = (slot[1], self.reference[f"{slot[0]}_order"]) if slot else None
+        self.at = _planted_at(effect, self.reference)
         own = list(effect.params) + ([f"{slot[0]}_a", f"{slot[0]}_b"] if slot else [])
         names = list(dict.fromkeys(own + anchors))
         jacobian = diag._jacobian(self.reference, names, self.channels)
@@ -220,7 +228,7 @@ def _moved(diag, effect: Effect, p: dict) -> bool:
     the move is needed held out the diagnosis says so (a resized finding, or
     unexplained structure when the travel does not resolve the harmonic):
     without a torque sensor on the independent truth's multisine bl1 went to
-    -17 tolerances, and a limit beside that said that a ripple of 1 arcmin
+    -18 tolerances, and a limit beside that said that a ripple of 1 arcmin
     would not show."""
     return any(_tolerances(diag, n, p[n]) > RESIZE_Z
                for n in effect.resizes if n in diag.priors and n in diag.calibrated_names)
@@ -254,8 +262,8 @@ class _TorsionPlanting:
 
     def __init__(self, diag, effect: Effect, p: dict):
         self.diag, self.effect, self.p = diag, effect, p
-        slot, self.angle_name = planted_slot(effect)
         self.reference = reference_set(effect, p)
+        self.at = _planted_at(effect, self.reference)
         self.base = torsion_less_kinematic(diag.prep, p)
         self.nuisance = torsion_nuisances(np.nan_to_num(diag.reference_torque(p)), diag.rec.theta_l)
         # The torsion's columns of eq. (7)'s calibrated terms (linear in them): what calibration would take.
@@ -276,7 +284,7 @@ class _TorsionPlanting:
             signature = signature - self.columns @ coef
             if resized(d, self.effect, self.p, dict(zip(self.names, coef))):
                 return True
-        _, passing = d.torsion_orders(self.effect, self.p, self.base + signature, self.nuisance, (self.angle_name,))
+        _, passing = d.torsion_orders(self.effect, self.p, self.base + signature, self.nuisance, (self.at[0],))
         return bool(passing)  # an order of its angle: the effect is tested there
 
 
@@ -287,8 +295,7 @@ def smallest_shown(diag, effect: Effect, p: dict, shared: dict | None = None) ->
         planting = _TorsionPlanting(diag, effect, p)
     else:
         planting = _Planting(diag, effect, p, {} if shared is None else shared)
-    slot = planted_slot(effect)
-    at = (slot[1], planting.reference[f"{slot[0]}_order"]) if slot else None
+    at = planting.at
     name = effect.size.parameter
     ref = planting.reference[name]
     found = None
