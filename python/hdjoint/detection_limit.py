@@ -91,16 +91,10 @@ class Limit:
         if self.limit is None:
             return (f"{where}it would not show at any size up to {LARGEST:g} times the reference "
                     f"({self.parameter} = {self.reference:.3g}) within the parameter's valid range")
-        unit = _unit(self.parameter)
+        unit = parameters.unit_in_text(parameters.table()[self.parameter].unit)
         return (f"{where}it shows only from a size of {self.parameter} = {self.limit:.3g}{unit} ({self.factor:.2g} "
                 f"times the size at {self.parameter} = {self.reference:.3g}"
                 f"{', ' + self.sourced if self.sourced else ''})")
-
-
-def _unit(name: str) -> str:
-    """' N.m' for a sentence; nothing for a ratio (unit "1")."""
-    unit = parameters.table()[name].unit
-    return "" if unit == "1" else f" {unit}"
 
 
 def _rounded(x: float | None) -> float | None:

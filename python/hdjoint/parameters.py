@@ -67,6 +67,11 @@ def table() -> dict[str, ParameterInfo]:
     return {row["name"]: ParameterInfo(**row) for row in _core.parameter_table()}
 
 
+def unit_in_text(unit: str) -> str:
+    """' N.m' to follow a value in a sentence; nothing for a ratio (unit "1")."""
+    return "" if unit == "1" else f" {unit}"
+
+
 def defaults(scope: str = "all") -> dict[str, float]:
     """Default values for 'all', 'estimator' or 'plant'."""
     pick = {

@@ -12,6 +12,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from . import diagnosis_plots as dp  # noqa: E402
+from .parameters import unit_in_text  # noqa: E402
 from .plots import to_data_uri  # noqa: E402
 from .structure import candidate_orders  # noqa: E402
 
@@ -150,17 +151,14 @@ def _validation_section(entries: list[dict]) -> str:
             + _extrapolation_notes(entries))
 
 
-def _unit(x: dict) -> str:
-    return "" if x["unit"] == "1" else f" {x['unit']}"  # a ratio (unit "1") has none
-
-
 def _limits_section(limits: list[dict]) -> str:
     """The smallest size of each effect tested and not found that this recording would have shown."""
     rows = [(x["effect"] + "".join(f" at {angle} order {_fmt(order)}" for angle, order in x.get("orders", [])),
-             f"{x['parameter']} = {_fmt(x['reference'])}{_unit(x)}"
+             f"{x['parameter']} = {_fmt(x['reference'])}{unit_in_text(x['unit'])}"
              + (f" ({x['reference_source']})" if x.get("reference_source") else ""),
              "none up to 1024 times that (or the parameter's valid range)" if x["limit"] is None else
-             f"{x['parameter']} = {_fmt(x['limit'])}{_unit(x)} ({_fmt(x['times_reference'])} times the reference)")
+             f"{x['parameter']} = {_fmt(x['limit'])}{unit_in_text(x['unit'])} "
+             f"({_fmt(x['times_reference'])} times the reference)")
             for x in limits]
     return ("<h2>How large an effect this recording would show</h2><p>Each effect tested and not found, planted "
             "into the corrected model at sizes around a reference; what calibration would take of it removed, the "
