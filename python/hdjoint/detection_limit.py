@@ -313,14 +313,19 @@ def smallest_shown(diag, effect: Effect, p: dict, shared: dict | None = None) ->
                  effect.size.source, at)
 
 
+def untold_effects(diag, p: dict, told: set[str] = frozenset()) -> list[Effect]:
+    """The effects detection_limits measures (see there)."""
+    accepted = {h.effect.id for h in diag.last_round if h.accepted()} | set(told)
+    return [e for e in diag.last_candidates if e.id not in accepted and e.size is not None
+            and not (planted_slot(e) and (slot_on(p, planted_slot(e)[0]) or _moved(diag, e, p)))]
+
+
 def detection_limits(diag, p: dict, told: set[str] = frozenset()) -> list[Limit]:
     """The limit of each effect the last round tested and did not accept (an
     effect at angle orders also when its search found no order), nor named
     in a finding (`told`: a resized one, a look-alike); an effect at angle
     orders not when its slot is in use or its terms moved (_moved). The
     effects side by side in forked processes (forked.py: the same limits)."""
-    accepted = {h.effect.id for h in diag.last_round if h.accepted()} | set(told)
-    effects = [e for e in diag.last_candidates if e.id not in accepted and e.size is not None
-               and not (planted_slot(e) and (slot_on(p, planted_slot(e)[0]) or _moved(diag, e, p)))]
+    effects = untold_effects(diag, p, told)
     shared: dict = {}  # in one process, the effects of a part share the anchors' Jacobian
     return map_forked(lambda i: smallest_shown(diag, effects[i], p, shared), len(effects), diag.workers)

@@ -1,7 +1,8 @@
 """A ripple at an angle order shows when calibration would move one of the
 effect's own terms (eq. (7) for the kinematic error) from within its
 tolerance to beyond it (detection_limit.resized); a term already beyond
-closes that route, and the effect then gets no limit (detection_limit._moved)."""
+closes that route, and the effect then gets no limit (detection_limit._moved).
+Which effects get a limit at all: detection_limit.untold_effects."""
 from types import SimpleNamespace
 
 from hdjoint.calibration import Prior
@@ -23,3 +24,15 @@ def test_only_the_effects_own_terms_count_and_a_term_already_beyond_closes_the_r
     assert not resized(DIAG, KINEMATIC, {"al1": 1e-4, "Kf": 1e4}, {"Kf": 5e3})
     assert not resized(DIAG, KINEMATIC, {"al1": 6e-4}, {"al1": 1e-4})
     assert _moved(DIAG, KINEMATIC, {"al1": 6e-4}) and not _moved(DIAG, KINEMATIC, {"al1": 3e-4})
+
+
+def test_which_effects_get_a_limit():
+    from hdjoint.detection_limit import untold_effects
+    effects = [EFFECTS[e] for e in ("kinematic_error", "backlash", "hysteresis", "cogging")]
+    diag = SimpleNamespace(**vars(DIAG), last_round=[], last_candidates=effects)
+    within = {"al1": 1e-4, "ke_l1_a": 0.0, "ke_l1_b": 0.0}
+    # cogging has no Size (its order is the motor's); a finding's effects (`told`) get none
+    assert [e.id for e in untold_effects(diag, within, {"hysteresis"})] == ["kinematic_error", "backlash"]
+    # a ripple whose slot the set already uses, or whose eq. (7) term already moved, gets none
+    assert [e.id for e in untold_effects(diag, dict(within, ke_l1_a=1e-5))] == ["backlash", "hysteresis"]
+    assert [e.id for e in untold_effects(diag, dict(within, al1=6e-4))] == ["backlash", "hysteresis"]
