@@ -382,9 +382,15 @@ class Hypothesis:
         every smooth hypothesis look like noise. Not a finding, not consistent either."""
         return self.p_value > FALSE_DISCOVERY_RATE and self.gain.gain >= UNCONFIRMED_GAIN and self._held_out_evidence()
 
-    def _held_out_evidence(self) -> bool:
-        return (not self.degenerate and self.gain.gain > MIN_GAIN and self._steady_over_folds() and self.delta_bic < -10.0
-                and self.channel_ratio() <= 1.0)
+    def explains_as_much_as(self, other: "Hypothesis") -> bool:
+        """Significant, at least `other`'s held-out gain, and every other count of
+        acceptance but steadiness over the folds."""
+        return (self.p_value <= FALSE_DISCOVERY_RATE and self.gain.gain >= other.gain.gain
+                and self._held_out_evidence(steady=False))
+
+    def _held_out_evidence(self, steady: bool = True) -> bool:
+        return (not self.degenerate and self.gain.gain > MIN_GAIN and (not steady or self._steady_over_folds())
+                and self.delta_bic < -10.0 and self.channel_ratio() <= 1.0)
 
     def channel_ratio(self) -> float:
         """What the torque channels do held out with it: the worst one's ratio, or their pooled one."""
@@ -1078,6 +1084,20 @@ def _separated(best: Hypothesis, rival: Hypothesis) -> bool:
     return bool(clearly and rival.gain.gain <= SEPARATED_RATIO * best.gain.gain)
 
 
+def _rival(best: Hypothesis, other: Hypothesis) -> bool:
+    """A look-alike of the best that explains the same structure, not clearly
+    less of it: accepted on its own, or explaining at least as much held out
+    and significant against the simulated null, though uneven over the folds.
+    Naming the best alone would then be a confident name the data do not
+    single out: on the independent truth's multisine a wave-generator
+    compliance at 4 times its concealed size came out as backlash (added,
+    0.4 % held out), while the compliance's own terms took 0.8 % (p = 6e-5,
+    13 of 20 folds)."""
+    if not (other.effect.id in best.effect.lookalikes or best.effect.id in other.effect.lookalikes):
+        return False
+    return (other.accepted() or other.explains_as_much_as(best)) and not _separated(best, other)
+
+
 def _confidence(h: Hypothesis) -> float:
     """A finding's confidence before sharing it with look-alikes: how far its
     held-out z (Hypothesis.evidence_z) clears 2, times one less its multiplicity-corrected p-value."""
@@ -1087,9 +1107,7 @@ def _confidence(h: Hypothesis) -> float:
 def _finding_for(best: Hypothesis, others: list[Hypothesis]) -> Finding:
     """An added finding, or an ambiguous one when a look-alike explains the same
     structure and is significant on its own."""
-    rivals = [o for o in others if o.accepted() and (o.effect.id in best.effect.lookalikes
-                                                      or best.effect.id in o.effect.lookalikes)
-              and not _separated(best, o)]
+    rivals = [o for o in others if _rival(best, o)]
     runner_up = others[0] if others else None
     confidence = _confidence(best)
     if not rivals:

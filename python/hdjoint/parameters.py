@@ -72,6 +72,11 @@ def unit_in_text(unit: str) -> str:
     return "" if unit == "1" else f" {unit}"
 
 
+def values_in_text(values: dict[str, float]) -> str:
+    """'hys_sigma = 2e+04 N.m/rad, omega_s = 20 rad/s': parameter values in a sentence."""
+    return ", ".join(f"{n} = {v:.3g}{unit_in_text(table()[n].unit)}" for n, v in values.items())
+
+
 def defaults(scope: str = "all") -> dict[str, float]:
     """Default values for 'all', 'estimator' or 'plant'."""
     pick = {

@@ -12,7 +12,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from . import diagnosis_plots as dp  # noqa: E402
-from .parameters import unit_in_text  # noqa: E402
+from .parameters import unit_in_text, values_in_text  # noqa: E402
 from .plots import to_data_uri  # noqa: E402
 from .structure import candidate_orders  # noqa: E402
 
@@ -153,7 +153,8 @@ def _validation_section(entries: list[dict]) -> str:
 
 def _limits_section(limits: list[dict]) -> str:
     """The smallest size of each effect tested and not found that this recording would have shown."""
-    rows = [(x["effect"] + "".join(f" at {angle} order {_fmt(order)}" for angle, order in x.get("orders", [])),
+    rows = [(x["effect"] + "".join(f" at {angle} order {_fmt(order)}" for angle, order in x.get("orders", []))
+             + (f" with {values_in_text(x['with'])}" if x.get("with") else ""),
              f"{x['parameter']} = {_fmt(x['reference'])}{unit_in_text(x['unit'])}"
              + (f" ({x['reference_source']})" if x.get("reference_source") else ""),
              "none up to 1024 times that (or the parameter's valid range)" if x["limit"] is None else

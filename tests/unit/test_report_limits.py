@@ -25,3 +25,19 @@ def test_a_ripple_limit_names_its_order_in_the_table_and_in_words():
     assert "at theta_l order 2, it shows only from a size of ke_l1_a = 0.000345 rad" in limit.sentence()
     page = _limits_section([doc])
     assert "<td>kinematic_error at theta_l order 2</td>" in page and "ke_l1_a = 0.000345 rad" in page
+
+
+def test_a_limit_names_the_shape_it_was_planted_with():
+    # A loop's limit holds for a loop switching within its sigma, not for every hysteresis.
+    from hdjoint.detection_limit import Limit, planted_shape, reference_set
+    from hdjoint.effects import EFFECTS
+    from hdjoint.parameters import defaults
+    shape = planted_shape(EFFECTS["hysteresis"], reference_set(EFFECTS["hysteresis"], defaults()))
+    assert shape == (("hys_sigma", defaults()["hys_sigma"]),)
+    limit = Limit("hysteresis", "hys_H", 0.3, 0.15, 0.5, 1.0, "", shape=shape)
+    assert limit.as_dict()["with"] == {"hys_sigma": 2e4}
+    assert limit.sentence().startswith("with hys_sigma = 2e+04 N.m/rad, it shows only from a size of hys_H = 0.15 N.m")
+    assert "<td>hysteresis with hys_sigma = 2e+04 N.m/rad</td>" in _limits_section([limit.as_dict()])
+    # Terms switched off at the reference are no part of its shape (thermal drift's Fc_drift).
+    thermal = planted_shape(EFFECTS["thermal_drift"], reference_set(EFFECTS["thermal_drift"], defaults()))
+    assert thermal == (("Kt_warmup_tc", 10.0),)
