@@ -60,7 +60,7 @@ def test_an_effect_hidden_at_its_sourced_reference_size_is_said_with_its_limit()
     hidden = _limit("wave_generator_compliance", "Kw", 10.0, 5.0, 2.0, grows=-1.0)
     shown = _limit("coulomb_friction", "Fc", 0.015, 0.003, 0.2)
     never = _limit("stiffness_nonlinearity", "Cf", 0.0645, None, None)
-    unsourced = _limit("hysteresis", "hys_H", 0.3, 0.6, 2.0, source="")
+    unsourced = _limit("time_delay", "i_delay", 0.001, 0.002, 2.0, source="")
     said = cannot_tell(_result([], limits=[hidden, shown, never, unsourced]))
     assert [x["effect"] for x in said] == ["wave_generator_compliance", "stiffness_nonlinearity"]
     assert "Kw = 5 N.m/rad (2 times the size at Kw = 10, a catalogue)" in said[0]["why"]

@@ -28,11 +28,11 @@ def test_only_the_effects_own_terms_count_and_a_term_already_beyond_closes_the_r
 
 def test_which_effects_get_a_limit():
     from hdjoint.detection_limit import untold_effects
-    effects = [EFFECTS[e] for e in ("kinematic_error", "backlash", "hysteresis", "cogging")]
+    effects = [EFFECTS[e] for e in ("kinematic_error", "backlash", "time_delay", "cogging", "hysteresis")]
     diag = SimpleNamespace(**vars(DIAG), last_round=[], last_candidates=effects)
     within = {"al1": 1e-4, "ke_l1_a": 0.0, "ke_l1_b": 0.0}
-    # cogging has no Size (its order is the motor's); a finding's effects (`told`) get none
-    assert [e.id for e in untold_effects(diag, within, {"hysteresis"})] == ["kinematic_error", "backlash"]
+    # cogging and hysteresis have no Size (effects.py says why); a finding's effects (`told`) get none
+    assert [e.id for e in untold_effects(diag, within, {"time_delay"})] == ["kinematic_error", "backlash"]
     # a ripple whose slot the set already uses, or whose eq. (7) term already moved, gets none
-    assert [e.id for e in untold_effects(diag, dict(within, ke_l1_a=1e-5))] == ["backlash", "hysteresis"]
-    assert [e.id for e in untold_effects(diag, dict(within, al1=6e-4))] == ["backlash", "hysteresis"]
+    assert [e.id for e in untold_effects(diag, dict(within, ke_l1_a=1e-5))] == ["backlash", "time_delay"]
+    assert [e.id for e in untold_effects(diag, dict(within, al1=6e-4))] == ["backlash", "time_delay"]

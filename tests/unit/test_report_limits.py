@@ -28,16 +28,23 @@ def test_a_ripple_limit_names_its_order_in_the_table_and_in_words():
 
 
 def test_a_limit_names_the_shape_it_was_planted_with():
-    # A loop's limit holds for a loop switching within its sigma, not for every hysteresis.
+    # A Stribeck rise's limit holds for a rise over its omega_s, not for every shape.
     from hdjoint.detection_limit import Limit, planted_shape, reference_set
     from hdjoint.effects import EFFECTS
     from hdjoint.parameters import defaults
-    shape = planted_shape(EFFECTS["hysteresis"], reference_set(EFFECTS["hysteresis"], defaults()))
-    assert shape == (("hys_sigma", defaults()["hys_sigma"]),)
-    limit = Limit("hysteresis", "hys_H", 0.3, 0.15, 0.5, 1.0, "", shape=shape)
-    assert limit.as_dict()["with"] == {"hys_sigma": 2e4}
-    assert limit.sentence().startswith("with hys_sigma = 2e+04 N.m/rad, it shows only from a size of hys_H = 0.15 N.m")
-    assert "<td>hysteresis with hys_sigma = 2e+04 N.m/rad</td>" in _limits_section([limit.as_dict()])
+    rise = EFFECTS["stribeck_friction"]
+    shape = planted_shape(rise, reference_set(rise, defaults()))
+    assert shape == (("omega_s", defaults()["omega_s"]),)
+    limit = Limit("stribeck_friction", "Fs", 0.01, 0.002, 0.2, 1.0, "", shape=shape)
+    assert limit.as_dict()["with"] == {"omega_s": 20.0}
+    assert limit.sentence().startswith("with omega_s = 20 rad/s, it shows only from a size of Fs = 0.002 N.m")
+    assert "<td>stribeck_friction with omega_s = 20 rad/s</td>" in _limits_section([limit.as_dict()])
     # Terms switched off at the reference are no part of its shape (thermal drift's Fc_drift).
     thermal = planted_shape(EFFECTS["thermal_drift"], reference_set(EFFECTS["thermal_drift"], defaults()))
     assert thermal == (("Kt_warmup_tc", 10.0),)
+
+
+def test_the_hysteresis_gets_no_limit():
+    # Its test misses loops of other laws far past the size a planting of its own law shows.
+    from hdjoint.effects import EFFECTS
+    assert EFFECTS["hysteresis"].size is None
