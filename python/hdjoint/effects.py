@@ -237,7 +237,7 @@ EFFECTS: dict[str, Effect] = {e.id: e for e in [
            # No detection limit: its test fails on loops of other laws far beyond the size at which a
            # planting of its own law shows (a Dahl loop with a squared approach, of 2-7.5 times that
            # limit, went unnamed: docs/diagnosis_measurements.md, "A loop that switches within an
-           # encoder count"). A limit that does not hold says more than none.
+           # encoder count"). A limit that does not hold is worse than none.
            stateful=True, resizes=("hys_H", "hys_sigma"), degenerate=_no_loop),
     Effect("backlash", "transmission", ("backlash",),
            "lost motion: a dead zone of torsion around zero torque", "dead zone of width `backlash` on the torsion",
