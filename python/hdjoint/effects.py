@@ -234,10 +234,11 @@ EFFECTS: dict[str, Effect] = {e.id: e for e in [
                                       {"hys_H": 0.8, "hys_sigma": 1e5}),
            needs="torque_reversals", lookalikes=("backlash", "coulomb_friction", "wave_generator_load"),
            revealed_by="slow load reversals of several amplitudes (a loop that grows with amplitude)",
-           # No detection limit: its test fails on loops of other laws far beyond the size at which a
-           # planting of its own law shows (a Dahl loop with a squared approach, of 2-7.5 times that
-           # limit, went unnamed: docs/diagnosis_measurements.md, "A loop that switches within an
-           # encoder count"). A limit that does not hold is worse than none.
+           # No detection limit: a planting follows the measured torsion, a joint's loop follows the
+           # true one, and its test misses loops switching over an encoder count far beyond the size
+           # at which a planting shows (2-7.5 times that limit went unnamed: docs/
+           # diagnosis_measurements.md, "A loop that switches within an encoder count").
+           # A limit that does not hold is worse than none.
            stateful=True, resizes=("hys_H", "hys_sigma"), degenerate=_no_loop),
     Effect("backlash", "transmission", ("backlash",),
            "lost motion: a dead zone of torsion around zero torque", "dead zone of width `backlash` on the torsion",
