@@ -185,7 +185,7 @@ class _Planting:
         jacobian = diag._jacobian(self.reference, names, self.channels)
         rows = [diag.channels.index(c) for c in self.channels]
         if "noise" not in shared:
-            shared["noise"] = diag._null_noise(p)
+            shared["noise"] = diag.null_noise_at(p)
         noise = shared["noise"].replicates(rows)
         if effect.uneven_over_folds:
             self.null = null_gain(noise, jacobian, diag.fit_index, diag.fold, diag.test)

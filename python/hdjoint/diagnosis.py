@@ -503,6 +503,8 @@ class Diagnosis:
         self.tested: list[list[dict]] = []  # every hypothesis tried, per round (evidence for the report)
         self.last_round: list[Hypothesis] = []  # the hypotheses of the round that ended the selection
         self.last_candidates: list[Effect] = []  # that round's effects, those without a hypothesis too (no order found)
+        self._noise: NullNoise | None = None  # the simulated null's noise of the last round (or test_alone) ...
+        self._noise_at: dict | None = None   # ... and the parameter set it was made at
         self._correlation: tuple | None = None  # (parameters, length), see _correlation_length
 
     def shown_residual(self, channel: Channel, p: dict) -> np.ndarray:
@@ -885,12 +887,19 @@ class Diagnosis:
         """One hypothesis tested on its own, as a round of `select` tests each
         (its simulated null included); its p-value is its raw one, with nothing
         to adjust over. None when this recording has no channel for it."""
-        self._noise = self._null_noise(p)
+        self._noise, self._noise_at = self._null_noise(p), p
         self._noise.prepare([[self.channels.index(c) for c in self.channels_of(effect.part)]])
         hypothesis = self._try(effect, p)
         if hypothesis is not None:
             hypothesis.p_value = hypothesis.p_raw
         return hypothesis
+
+    def null_noise_at(self, p: dict) -> NullNoise:
+        """The simulated null's noise at `p`: the last round's when it was made
+        at this very set (a round that accepts nothing leaves the set as it
+        was, and sigma is fixed after calibration), else made now. The same
+        noise either way (NullNoise is seeded), its replicates already made."""
+        return self._noise if self._noise is not None and self._noise_at is p else self._null_noise(p)
 
     def _null_noise(self, p) -> NullNoise:
         return NullNoise(np.stack([np.where(self.used, np.nan_to_num(self.eval.residual(c, p) / self.sigma[c.name]),
@@ -917,7 +926,7 @@ class Diagnosis:
         findings: list[Finding] = []
         while candidates:
             self.say(f"testing {len(candidates)} hypotheses ({', '.join(e.id for e in candidates)})")
-            self._noise = self._null_noise(p)
+            self._noise, self._noise_at = self._null_noise(p), p
             self._correlation_length(p)  # here, once: the forked fits of the round inherit it
             tried = self._try_all(candidates, p)
             self.last_candidates = list(candidates)
