@@ -17,11 +17,12 @@ and the diagnosis's own test is run on what it would add:
     the part's calibrated parameters on the training rows (their Jacobian,
     as each hypothesis refits them), removed;
   - the rest added to the recording's own residual and taken away by the
-    effect's fit (and on its own, as if independent of the residual, it
-    must explain over MIN_GAIN of it: planted_gains): held-out gain, fold z and the p-value against the
-    simulated null, with the acceptance rules of a hypothesis (gain > 0.3 %,
-    z > 3 over >= 70 % of the folds, or pooled against the null for an
-    effect uneven over the folds; p <= the false discovery rate).
+    effect's fit (on its own, as if independent of the residual, it must
+    also explain over MIN_GAIN of it: planted_gains): held-out gain, fold
+    z and the p-value against the simulated null, with the acceptance
+    rules of a hypothesis (gain > 0.3 %, z > 3 over >= 70 % of the folds,
+    or pooled against the null for an effect uneven over the folds; p <=
+    the false discovery rate).
 
 An effect at angle orders (the kinematic error) is planted at the one order
 its Size states, in a free slot, and the calibrated terms of eq. (7) join
@@ -72,7 +73,7 @@ class Limit:
     sourced: str          # where the reference comes from ("": no claim about typical sizes)
     at: tuple[str, float] | None = None  # (angle, order) an effect at angle orders was planted at
     # The effect's other terms it was planted with (the reference's, else the table's defaults): a
-    # limit holds for that shape (a loop switching within its sigma), not for every form of the effect.
+    # limit holds for that shape (a Stribeck rise over its omega_s), not for every form of the effect.
     shape: tuple[tuple[str, float], ...] = ()
 
     def as_dict(self) -> dict:

@@ -73,7 +73,7 @@ def unit_in_text(unit: str) -> str:
 
 
 def values_in_text(values: dict[str, float]) -> str:
-    """'hys_sigma = 2e+04 N.m/rad, omega_s = 20 rad/s': parameter values in a sentence."""
+    """'omega_s = 20 rad/s, Kt_warmup_tc = 10 s': parameter values in a sentence."""
     return ", ".join(f"{n} = {v:.3g}{unit_in_text(table()[n].unit)}" for n, v in values.items())
 
 
