@@ -33,3 +33,32 @@ def test_on_a_residual_of_noise_both_agree_and_grow_with_the_planting():
         assert gain.gain > MIN_GAIN and gain.z > 3.0
     assert abs(small[0].gain - small[1].gain) < 0.01 and max(g.gain for g in small) < min(g.gain for g in large)
     assert abs(large[1].gain - 0.5) < 0.03
+
+
+class _StubPlanting:
+    """A _Planting over a given residual: the effect's signature is `factor` times SHAPE, nothing calibrated away."""
+
+    def __new__(cls, base):
+        from types import SimpleNamespace
+        from hdjoint.detection_limit import _Planting, reference_set
+        from hdjoint.effects import EFFECTS
+        from hdjoint.parameters import defaults
+        planting = object.__new__(_Planting)
+        effect = EFFECTS["stribeck_friction"]  # stationary: judged by the fold z against the null
+        reference = reference_set(effect, defaults())
+        planting.diag = SimpleNamespace(fold=FOLD, test=TEST)
+        planting.effect, planting.p, planting.at = effect, reference, None
+        planting.reference, planting.anchor_jacobian = reference, None
+        planting.base = base[None, :]
+        planting.null = RNG.normal(size=48)  # fold z of noise: about N(0, 1)
+        size = reference["Fs"]
+        planting._residuals = lambda q: planting.base - (q["Fs"] / size) * SHAPE[None, :]
+        return planting
+
+
+def test_a_planting_shows_only_when_it_explains_enough_on_its_own():
+    missed_loop = _StubPlanting(0.3 * SHAPE + 0.05 * RNG.normal(size=N))
+    # 0.002: through the cross term alone over 1 % held out on every fold; on its own nothing.
+    assert not missed_loop.shown(0.002)
+    assert missed_loop.shown(0.05)  # its own share: about 2.5 %
+    assert _StubPlanting(0.05 * RNG.normal(size=N)).shown(0.01)
