@@ -1062,7 +1062,7 @@ class Diagnosis:
         effect = finding.effect
         rivals = [h for h in self.last_round
                   if h.effect.part == effect.part and not h.degenerate
-                  and (h.effect.id in effect.lookalikes or effect.id in h.effect.lookalikes)
+                  and effect.looks_like(h.effect)
                   and h.gain.gain >= finding.resize_gain.gain]
         if not rivals:
             return finding
@@ -1102,7 +1102,7 @@ def _rival(best: Hypothesis, other: Hypothesis) -> bool:
     compliance at 4 times its concealed size came out as backlash (added,
     0.4 % held out), while the compliance's own terms took 0.8 % (p = 6e-5,
     13 of 20 folds)."""
-    if not (other.effect.id in best.effect.lookalikes or best.effect.id in other.effect.lookalikes):
+    if not best.effect.looks_like(other.effect):
         return False
     return (other.accepted() or other.explains_as_much_as(best)) and not _separated(best, other)
 

@@ -112,6 +112,10 @@ class Effect:
     degenerate: Callable[[dict, float], str | None] = lambda p, span: None
     size: Size | None = None  # None: no detection limit
 
+    def looks_like(self, other: "Effect") -> bool:
+        """Either names the other a look-alike (the relation is read both ways)."""
+        return other.id in self.lookalikes or self.id in other.lookalikes
+
     def carries(self) -> tuple[str, ...]:
         """Every model parameter of this effect (for checking the build has them)."""
         slot_terms = tuple(f"{slot}_{k}" for slot, _ in self.slots for k in ("order", "a", "b"))

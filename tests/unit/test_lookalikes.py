@@ -75,3 +75,11 @@ def test_an_unaccepted_lookalike_explaining_less_or_not_significant_leaves_the_f
     degenerate = _hypothesis("wave_generator_compliance", _uneven(FOLD_GAINS * 3))
     degenerate.degenerate = "a spring, not a loop"
     assert _finding_for(best, [degenerate]).kind == "added"
+
+
+def test_the_lookalike_relation_is_read_both_ways():
+    # The wave generator's load names its compliance, which does not name it back.
+    load, compliance = EFFECTS["wave_generator_load"], EFFECTS["wave_generator_compliance"]
+    assert "wave_generator_load" not in compliance.lookalikes
+    assert load.looks_like(compliance) and compliance.looks_like(load)
+    assert not EFFECTS["gravity_load"].looks_like(EFFECTS["backlash"])
