@@ -113,13 +113,12 @@ def propose(rec, kin, residual: np.ndarray, torque: np.ndarray, fold: np.ndarray
 
 def propose_terms(diag, p: dict, unexplained: list[dict]) -> list[dict]:
     """The fallback for a diagnosis: one proposal per channel with unexplained structure."""
-    from .channels import SMOOTHED_PARTS
     out = []
     for channel in diag.channels:
         if not any(u.get("channel") == channel.name for u in unexplained):
             continue
         proposal = propose(diag.rec, diag.prep.kin, diag.shown_residual(channel, p), diag.reference_torque(p),
-                           diag.fold, diag.train, diag.test, channel.part in SMOOTHED_PARTS)
+                           diag.fold, diag.train, diag.test, channel.smoothed())
         if proposal:
             out.append(dict(proposal, channel=channel.name))
     return out
