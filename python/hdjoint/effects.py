@@ -110,6 +110,9 @@ class Effect:
     seen_on_torsion: bool = False
     # (fitted parameters, torsion span of the recording in rad) -> why the fit is not this effect, or None
     degenerate: Callable[[dict, float], str | None] = lambda p, span: None
+    # Its gain must be its own: with its terms back off and the part's refitted
+    # parameters kept, the fit must lose held-out gain (Diagnosis._borrowed_gain).
+    own_gain_checked: bool = False
     size: Size | None = None  # None: no detection limit
 
     def looks_like(self, other: "Effect") -> bool:
@@ -243,7 +246,7 @@ EFFECTS: dict[str, Effect] = {e.id: e for e in [
            # at which a planting shows (2-7.5 times that limit went unnamed: docs/
            # diagnosis_measurements.md, "A loop that switches within an encoder count").
            # A limit that does not hold is worse than none.
-           stateful=True, resizes=("hys_H", "hys_sigma"), degenerate=_no_loop),
+           stateful=True, resizes=("hys_H", "hys_sigma"), degenerate=_no_loop, own_gain_checked=True),
     Effect("backlash", "transmission", ("backlash",),
            "lost motion: a dead zone of torsion around zero torque", "dead zone of width `backlash` on the torsion",
            _nonzero("backlash"), starts=({"backlash": 1e-5}, {"backlash": 4e-5}, {"backlash": 1.5e-4}),
