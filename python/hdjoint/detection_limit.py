@@ -289,7 +289,7 @@ class _TorsionPlanting:
         self.reference = reference_set(effect, p)
         self.at = _planted_at(effect, self.reference)
         self.base = torsion_less_kinematic(diag.prep, p)
-        self.nuisance = torsion_nuisances(np.nan_to_num(diag.reference_torque(p)), diag.rec.theta_l)
+        self.nuisance = torsion_nuisances(diag.torsion_torque(p), diag.rec.theta_l)
         # The torsion's columns of eq. (7)'s calibrated terms (linear in them): what calibration would take.
         # base + signature - columns @ move is least with move = the signature's fit by the columns.
         self.names, step = _orders_calibrated(diag, effect), 1e-4

@@ -57,8 +57,10 @@ def correlation_length(r: np.ndarray) -> int:
 
 
 def nuisances(torque: np.ndarray, theta_l: np.ndarray) -> np.ndarray:
-    """(sample, column): a constant, the reference torque, the link angle (centred)."""
-    return np.column_stack([np.ones_like(torque), torque, theta_l - np.mean(theta_l)])
+    """(sample, column): a constant, the reference torque (one column, or
+    several: (sample, column)), the link angle (centred)."""
+    torque = torque.reshape(len(theta_l), -1)
+    return np.column_stack([np.ones(len(theta_l)), torque, theta_l - np.mean(theta_l)])
 
 
 def _nuisance_residual(torsion, nuisance, train, test):
