@@ -299,10 +299,10 @@ class Evaluator:
         """The estimate `channel` subtracts, through the smoothing filter when
         its reference is seen through it (Channel.smooths_part). Without a
         sensor, the transmission's unsmoothed torque against the motor's
-        smoothed one left tau_T's band above the filter in the residual
-        (0.30 of 0.33 N.m rms at the independent truth's values), which a
-        softer spring shrinks: the calibration put Kf at 0.2-0.4 times the
-        truth's, with an interval that excluded it."""
+        smoothed one left tau_T's band above the filter in the residual,
+        which a softer spring shrinks: on the independent truth's controls
+        the calibration put Kf at 0.2-0.4 times the truth's, with an
+        interval that excluded it (0.6-0.8 times smoothed alike)."""
         value = self.estimate(channel.part, p)
         if not channel.smooths_part():
             return value
