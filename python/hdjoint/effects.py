@@ -369,16 +369,16 @@ def testable(effect: Effect, prep: Prepared, reference_torque: np.ndarray) -> st
                   "the motor turns less than one revolution"),
         "torque": (torque_span > 0.5, f"the torque varies by only {torque_span:.2f} N.m"),
         "torque_reversals": (_reversals(reference_torque - np.nanmedian(reference_torque), 0.05 * max(torque_span, 1e-9)) >= 2,
-                             "the load never reverses"),
-        "speed_reversals": (_reversals(kin.omega_m, 0.5) >= 2, "the motor never reverses"),
+                             "the load reverses fewer than twice"),
+        "speed_reversals": (_reversals(kin.omega_m, 0.5) >= 2, "the motor reverses fewer than twice"),
         "low_speed": (np.mean((speed > 0.2) & (speed < 20.0)) > 0.02 and _reversals(kin.omega_m, 0.5) >= 2,
-                      "the motor never passes slowly through zero speed"),
+                      "the motor passes slowly through zero speed fewer than twice"),
         "speed": (np.percentile(speed, 95) > 10.0, "the motor never runs faster than 10 rad/s"),
         "current_dynamics": (np.std(np.diff(rec.i_m)) > 0 and np.ptp(kin.alpha_m) > 50.0,
                              "the current and acceleration hardly change"),
         "duration": (rec.duration >= 10.0, f"the recording lasts {rec.duration:.1f} s (< 10 s)"),
         "link_travel": (np.ptp(rec.theta_l) > 0.05, "the link moves less than 0.05 rad"),
-        "link_reversals": (_reversals(kin.omega_l, 0.005) >= 2, "the link never reverses"),
+        "link_reversals": (_reversals(kin.omega_l, 0.005) >= 2, "the link reverses fewer than twice"),
     }
     ok, why = checks[effect.needs] if effect.needs else (True, "")
     return None if ok else why
