@@ -96,8 +96,12 @@ def _reversals(x, threshold) -> int:
     return int(np.count_nonzero(np.diff(s)))
 
 
-def contents(rec, n: float) -> dict:
-    """What the recording holds, and what it therefore cannot say."""
+def contents(rec, n: float, doc: dict) -> dict:
+    """What the recording holds, and what it therefore cannot say: the
+    diagnosis's own reasons (`not_testable`), grouped by reason, so that the
+    table and the engine cannot disagree. (A list written here said
+    "friction and hysteresis are not testable" on joint1_jog, whose load
+    reverses, while the engine tested hysteresis there.)"""
     kin = kinematics(rec, sigma_s=0.02)
     torque = rec.i_m * n * KT
     info = {"duration_s": round(rec.duration, 2), "samples": len(rec),
@@ -106,21 +110,11 @@ def contents(rec, n: float) -> dict:
             "link_travel_rad": round(float(np.ptp(rec.theta_l)), 3),
             "motor_reversals": _reversals(kin.omega_m, 0.5), "link_reversals": _reversals(kin.omega_l, 0.005),
             "torque_range_Nm": [round(float(np.percentile(torque, 2)), 1), round(float(np.percentile(torque, 98)), 1)]}
-    limits = []
-    if info["motor_revolutions"] < 2:
-        limits.append("the motor turns less than two revolutions: motor-angle kinematic-error orders cannot be "
-                      "told from a slow drift")
-    if info["link_travel_rad"] < 2 * math.pi:
-        limits.append(f"the link travels {info['link_travel_rad']} rad, a fraction of a revolution: link-angle "
-                      "orders of the kinematic error are confounded with the offset and gravity")
-    if info["motor_reversals"] < 2:
-        limits.append("the motor reverses fewer than twice: friction and hysteresis are not testable")
-    if min(abs(t) for t in info["torque_range_Nm"]) > 0 and np.sign(info["torque_range_Nm"][0]) == \
-            np.sign(info["torque_range_Nm"][1]):
-        limits.append("the load never changes sign: hysteresis, backlash and the stiffness law's symmetry cannot be seen")
-    if info["duration_s"] < 10:
-        limits.append(f"{info['duration_s']} s is too short for drifts")
-    info["cannot_say"] = limits
+    by_reason: dict[str, list[str]] = {}
+    for entry in doc.get("not_testable", []):
+        reason = entry["reason"].removeprefix("not testable on this recording: ")
+        by_reason.setdefault(reason, []).append(entry["effect"])
+    info["cannot_say"] = [f"{reason}: {', '.join(effects)} not testable" for reason, effects in by_reason.items()]
     return info
 
 
@@ -160,7 +154,7 @@ def run_joint(joint: str, files: list[str], data: Path, tmp: Path) -> list[dict]
         doc = _diagnose(rec, n, tmp, f"{joint}-{k}")
         calibration = doc.get("calibration", {})
         row = {"joint": joint, "recording": name, "N": n, "N_encoders": round(gear_ratio(rec), 3),
-               "contents": contents(rec, n),
+               "contents": contents(rec, n, doc),
                "verdict": doc["verdict"],
                "findings": [{"effect": f["effect"], "kind": f.get("kind", "added"),
                              "orders": {key: v for key, v in f["parameters"].items() if key.endswith("_order")}}
