@@ -195,7 +195,7 @@ class _Planting:
 
     def _residuals(self, q: dict) -> np.ndarray:
         d = self.diag
-        return np.stack([np.where(d.used, np.nan_to_num(d.eval.residual(c, q) / d.sigma[c.name]), 0.0)
+        return np.stack([np.where(d.used, np.nan_to_num(d.normalised_residual(c, q)), 0.0)
                          for c in self.channels])
 
     def _calibrated(self, signature: np.ndarray) -> tuple[np.ndarray, dict]:
@@ -236,7 +236,7 @@ class _Planting:
         along the angle, beside a polynomial trend, and only when it is most
         of the residual."""
         d, angle = self.diag, self.at[0]
-        added = {c.name: left[i] * d.sigma[c.name] for i, c in enumerate(self.channels)}
+        added = {c.name: left[i] * d.noise_scale(c, self.p) for i, c in enumerate(self.channels)}
         seen = d._orders_seen  # what the search notes is the round's, not this planting's
         try:
             found = d.order_search(self.p, self.effect.part, self.channels, (angle,), added=added)
