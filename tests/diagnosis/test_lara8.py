@@ -110,7 +110,7 @@ def test_a_residual_the_simulated_null_cannot_judge_is_not_called_consistent():
     Without a torque sensor the link channel keeps its mean (a0 owns the
     transmission's constant); compared free of it, this load that never
     changes sign was hidden (gravity 31 % held out, p = 0.048) and the
-    verdict was `consistent` (diagnosis.free_of_mean)."""
+    verdict was `consistent` (diagnosis.mean_allowance)."""
     rec = lara8_table.read_joint(DATA / "joint2_jog_joint_mass.csv")
     _, doc = diagnose(rec, lara8_table.nominal_for(lara8_table.TOOTH_RATIO["joint2"]))
     gravity = next(h for h in doc["hypotheses_tested"][-1] if h["effect"] == "gravity_load")
