@@ -12,10 +12,12 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from hdjoint.diagnosis import Diagnosis
 from hdjoint import effects
+from hdjoint.diagnosis import Diagnosis
 from hdjoint.effects import EFFECTS, FREQUENCY_FOLLOWS_TIME, frequency_time_correlation
 from hdjoint.truth.cases import CONTROL_CASES, draw, record
+
+pytestmark = pytest.mark.slow  # each draws and simulates the truth's recordings
 
 
 def _prepared(case: str, seed: int, sensor: bool):
