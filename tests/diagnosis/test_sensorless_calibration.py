@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 from threadpoolctl import threadpool_limits
 
-from hdjoint.diagnosis.engine import CURRENT_OFFSET_SHARE, Diagnosis, channels_for
+from hdjoint.diagnosis.channels import CURRENT_OFFSET_SHARE, channels_for
+from hdjoint.diagnosis.engine import Diagnosis
 from hdjoint_truth.cases import CONTROL_CASES, draw, record
 
 pytestmark = pytest.mark.slow

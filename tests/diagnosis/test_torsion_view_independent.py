@@ -15,7 +15,8 @@ from dataclasses import replace
 import pytest
 from threadpoolctl import threadpool_limits
 
-from hdjoint.diagnosis.engine import TORSION_VIEW, Diagnosis
+from hdjoint.diagnosis.channels import TORSION_VIEW
+from hdjoint.diagnosis.engine import Diagnosis
 from hdjoint.diagnosis.effects import EFFECTS
 from hdjoint_truth.cases import EFFECT_CASES, draw, record
 

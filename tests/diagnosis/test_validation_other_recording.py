@@ -7,7 +7,8 @@ from pathlib import Path
 import numpy as np
 
 from hdjoint.diagnosis.part_torques import Prepared
-from hdjoint.diagnosis.engine import Evaluator, channels_for, place_offset
+from hdjoint.diagnosis.channels import Evaluator, channels_for
+from hdjoint.diagnosis.prepare import place_offset
 from hdjoint.diagnosis.kinematics import kinematics
 from hdjoint_truth.cases import CONTROL_CASES, draw, record
 from hdjoint.diagnosis.validation import summary_line, validate

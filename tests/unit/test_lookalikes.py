@@ -3,7 +3,8 @@ fold, is reported as one ambiguous finding with both and the excitation
 that would separate them; a clearly better one is added alone."""
 import numpy as np
 
-from hdjoint.diagnosis.engine import Hypothesis, _finding_for
+from hdjoint.diagnosis.decide import finding_for
+from hdjoint.diagnosis.hypotheses import Hypothesis
 from hdjoint.diagnosis.effects import EFFECTS
 from hdjoint.diagnosis.findings import separate_by
 from hdjoint.diagnosis.structure import HeldOutGain
@@ -25,7 +26,7 @@ FOLD_GAINS = 0.05 + 0.01 * RNG.normal(size=20)
 def test_two_lookalikes_explaining_the_same_structure_are_one_ambiguous_finding():
     best = _hypothesis("wave_generator_compliance", FOLD_GAINS)
     rival = _hypothesis("stiffness_nonlinearity", FOLD_GAINS * 0.97 + 0.002 * RNG.normal(size=20))
-    finding = _finding_for(best, [rival])
+    finding = finding_for(best, [rival])
     assert finding.kind == "ambiguous" and [a.effect.id for a in finding.alternatives] == ["stiffness_nonlinearity"]
     sentence = separate_by([best.effect, rival.effect])
     assert "wider torque range" in sentence and "stiffness_nonlinearity" in sentence
@@ -34,13 +35,13 @@ def test_two_lookalikes_explaining_the_same_structure_are_one_ambiguous_finding(
 def test_a_lookalike_the_better_hypothesis_beats_fold_by_fold_is_not_reported():
     best = _hypothesis("wave_generator_compliance", FOLD_GAINS)
     rival = _hypothesis("stiffness_nonlinearity", FOLD_GAINS * 0.3 + 0.002 * RNG.normal(size=20))
-    assert _finding_for(best, [rival]).kind == "added"
+    assert finding_for(best, [rival]).kind == "added"
 
 
 def test_an_insignificant_lookalike_or_an_unrelated_effect_leaves_the_finding_added():
     best = _hypothesis("coulomb_friction", FOLD_GAINS)
-    assert _finding_for(best, [_hypothesis("stribeck_friction", FOLD_GAINS, p_value=0.3)]).kind == "added"
-    assert _finding_for(best, [_hypothesis("gravity_load", FOLD_GAINS)]).kind == "added"
+    assert finding_for(best, [_hypothesis("stribeck_friction", FOLD_GAINS, p_value=0.3)]).kind == "added"
+    assert finding_for(best, [_hypothesis("gravity_load", FOLD_GAINS)]).kind == "added"
 
 
 def test_every_lookalike_names_an_effect_and_the_excitation_that_reveals_it():
@@ -62,19 +63,19 @@ def test_a_lookalike_explaining_more_though_unevenly_makes_the_finding_ambiguous
     best = _hypothesis("backlash", FOLD_GAINS * 0.1)
     rival = _hypothesis("wave_generator_compliance", _uneven(FOLD_GAINS))
     assert not rival.accepted() and rival.gain.gain > best.gain.gain
-    finding = _finding_for(best, [rival])
+    finding = finding_for(best, [rival])
     assert finding.kind == "ambiguous" and finding.named() == ["backlash", "wave_generator_compliance"]
 
 
 def test_an_unaccepted_lookalike_explaining_less_or_not_significant_leaves_the_finding_added():
     best = _hypothesis("backlash", FOLD_GAINS)
-    assert _finding_for(best, [_hypothesis("wave_generator_compliance", _uneven(FOLD_GAINS * 0.5))]).kind == "added"
-    assert _finding_for(best, [_hypothesis("wave_generator_compliance", _uneven(FOLD_GAINS * 3),
+    assert finding_for(best, [_hypothesis("wave_generator_compliance", _uneven(FOLD_GAINS * 0.5))]).kind == "added"
+    assert finding_for(best, [_hypothesis("wave_generator_compliance", _uneven(FOLD_GAINS * 3),
                                            p_value=0.2)]).kind == "added"
     # A fit that is not the effect it stands for is no rival either.
     degenerate = _hypothesis("wave_generator_compliance", _uneven(FOLD_GAINS * 3))
     degenerate.degenerate = "a spring, not a loop"
-    assert _finding_for(best, [degenerate]).kind == "added"
+    assert finding_for(best, [degenerate]).kind == "added"
 
 
 def test_the_lookalike_relation_is_read_both_ways():

@@ -9,7 +9,8 @@ from types import SimpleNamespace
 import numpy as np
 
 from hdjoint.diagnosis.calibration import Calibrated, Prior
-from hdjoint.diagnosis.engine import Diagnosis, Finding, Hypothesis
+from hdjoint.diagnosis.engine import Diagnosis
+from hdjoint.diagnosis.hypotheses import Finding, Hypothesis
 from hdjoint.diagnosis.effects import EFFECTS
 from hdjoint.diagnosis.structure import HeldOutGain
 

@@ -6,7 +6,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from hdjoint.io import parameters
-from hdjoint.diagnosis.engine import unresolved_harmonics
+from hdjoint.diagnosis.prepare import unresolved_harmonics
 from hdjoint.diagnosis.structure import candidate_orders, resolves
 
 

@@ -10,7 +10,7 @@ from typing import Callable
 
 import numpy as np
 
-from hdjoint.diagnosis.part_torques import KINEMATIC_EQ7, KINEMATIC_EXTRA, Prepared
+from hdjoint.diagnosis.part_torques import KINEMATIC_EQ7, Prepared
 
 
 def _own_parameters(effect: "Effect", p: dict, search) -> tuple[dict, list[str], list]:

@@ -26,330 +26,62 @@ from __future__ import annotations
 
 import math
 import time as _time
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from typing import Callable
 
 import numpy as np
 from scipy.optimize import least_squares
 from scipy.stats import norm
 
-from hdjoint.io import parameters
 from hdjoint.diagnosis.calibration import Calibrated, Prior, posterior_std, priors, robust_std, widened
-from hdjoint.diagnosis.part_torques import (ESTIMATES, SMOOTHED_PARTS, Prepared, depends_on, sharp_transmission,
-    tau_transmission, torsion_less_kinematic)
+from hdjoint.diagnosis.channels import TORSION_VIEW, Channel, Evaluator, channels_for
 from hdjoint.diagnosis.current_alignment import align_current
+from hdjoint.diagnosis.decide import confidence_of, finding_for
+from hdjoint.diagnosis.effects import (
+    ALWAYS_CALIBRATED,
+    EFFECTS,
+    Effect,
+    calibrated_parameters,
+    fill_slots,
+    orthogonal_parameters,
+    owner,
+    slot_on,
+    testable,
+)
 from hdjoint.diagnosis.forked import map_forked
-from hdjoint.diagnosis.motor_rest import motor_at_rest
-from hdjoint.diagnosis.friction_lookalike import SMOOTHING_LOOKALIKE, SteadyEvidence, held_speed, steady_evidence
-from hdjoint.diagnosis.effects import (ALWAYS_CALIBRATED, EFFECTS, Effect, calibrated_parameters, fill_slots,
-    orthogonal_parameters, owner, slot_on, testable)
+from hdjoint.diagnosis.friction_lookalike import SMOOTHING_LOOKALIKE, held_speed, steady_evidence
+from hdjoint.diagnosis.hypotheses import Finding, Fit, Hypothesis, delta_bic
+from hdjoint.diagnosis.kinematics import kinematics
+from hdjoint.diagnosis.part_torques import Prepared, sharp_transmission, tau_transmission, torsion_less_kinematic
+from hdjoint.diagnosis.prepare import check_recording, eq7_orders, joined, place_offset, unresolved_harmonics
+from hdjoint.diagnosis.rules import (
+    ANALYSED_SECONDS,
+    DOMINANT_GAIN,
+    EVIDENCE_Z,
+    FALSE_DISCOVERY_RATE,
+    FIT_SAMPLES,
+    HYPOTHESIS_FTOL,
+    MIN_GAIN,
+    ORDER_PROMINENCE,
+    RESIZE_Z,
+    SCORE_BLOCKS,
+    STRUCTURE_GAIN,
+    UNRESOLVED_GAIN,
+)
+from hdjoint.diagnosis.significance import NullNoise, benjamini_hochberg, null_gain, null_z, p_value, standardised
+from hdjoint.diagnosis.structure import (
+    Order,
+    candidate_orders,
+    held_out_gain_sq,
+    lowest_unresolved_order,
+    order_search,
+    unresolved_order,
+    unresolved_trend,
+)
+from hdjoint.diagnosis.torsion_orders import MIN_REVOLUTIONS, fit_orders, order_evidence
+from hdjoint.diagnosis.torsion_orders import nuisances as torsion_nuisances
+from hdjoint.io import parameters
 from hdjoint.io.recording import Recording
-from hdjoint.diagnosis.significance import (NullNoise, benjamini_hochberg, null_gain, null_z,
-    p_value, standardised)
-from hdjoint.diagnosis.kinematics import folds as make_folds, kinematics, sample_windows, window_labels
-from hdjoint.diagnosis.structure import (RESOLVING_PERIODS, HeldOutGain, Order, candidate_orders,
-    fold_z, held_out_gain_sq, lowest_unresolved_order, order_search, resolves, unresolved_order, unresolved_trend)
-from hdjoint.io.timebase import GAP_FACTOR
-from hdjoint.diagnosis.rules import (ANALYSED_SECONDS, DOMINANT_GAIN, EVIDENCE_Z, FALSE_DISCOVERY_RATE, FIT_SAMPLES,
-    FOLDS, HYPOTHESIS_FTOL, ORDER_PROMINENCE, STRUCTURE_GAIN, MIN_DURATION, MIN_GAIN, MIN_SAMPLES, RESIZE_Z, SCORE_BLOCKS, SEEN_BIC, SEPARATED_RATIO,
-    SEPARATED_Z, UNCONFIRMED_GAIN, UNRESOLVED_GAIN, steady_over_folds)
-from hdjoint.diagnosis.torsion_orders import (MIN_REVOLUTIONS, fit_orders, nuisances as torsion_nuisances,
-    order_evidence)
-
-class DiagnosisError(ValueError):
-    """The recording cannot be diagnosed (too short, gaps, ...)."""
-
-
-@dataclass
-class Channel:
-    """A residual between two torque estimates: reference minus model part."""
-    name: str
-    reference: str  # "sensor" or a part
-    part: str       # the part whose estimate is subtracted
-    # The parameter the channel's noise scales with (Diagnosis.noise_scale),
-    # when neither side is tied to a measured torque (a sensor, the current).
-    scales_with: str | None = None
-
-    def parts(self) -> set[str]:
-        return {self.part} | ({self.reference} - {"sensor"})
-
-    def smoothed(self) -> bool:
-        """Whether the channel compares through the kinematics' smoothing
-        filter: either side is a part seen through it, so both must be."""
-        return bool(self.parts() & set(SMOOTHED_PARTS))
-
-    def smooths_part(self) -> bool:
-        """Whether the part's estimate goes through that filter: its
-        reference is seen through it and the part is not (without a sensor,
-        the transmission against the motor or the link)."""
-        return self.reference in SMOOTHED_PARTS and self.part not in SMOOTHED_PARTS
-
-
-def channels_for(has_sensor: bool) -> list[Channel]:
-    if has_sensor:
-        return [Channel("transmission", "sensor", "transmission"), Channel("motor", "sensor", "motor"),
-                Channel("link", "sensor", "link")]
-    # Without a sensor the transmission (encoders) is the reference: its
-    # quantisation noise is far below the motor's (current, acceleration).
-    # The link's side is the link's motion, the other the encoders' torsion:
-    # every term of it scales with the joint's torque scale, its noise (the
-    # link's acceleration) with Jl.
-    return [Channel("motor vs transmission", "motor", "transmission"),
-            Channel("link vs transmission", "link", "transmission", scales_with="Jl")]
-
-
-def check_recording(rec: Recording) -> None:
-    where = rec.path or "recording"
-    if len(rec) < MIN_SAMPLES or rec.duration < MIN_DURATION:
-        raise DiagnosisError(f"{where}: too short to diagnose ({len(rec)} samples, {rec.duration:.2f} s; "
-                             f"need at least {MIN_SAMPLES} samples and {MIN_DURATION} s)")
-    dt = np.diff(rec.time)
-    step = float(np.median(dt))
-    gaps = np.flatnonzero(dt > GAP_FACTOR * step)  # the same rule as `hdjoint estimate`'s
-    if len(gaps):
-        g = gaps[0]
-        raise DiagnosisError(f"{where}: a gap of {dt[g]:.4g} s after t = {rec.time[g]:.6g} s (line {g + 2}); "
-                             f"the median step is {step:.4g} s. Split the recording at its gaps.")
-
-
-TORSION_VIEW = "the encoders' torsion (no torque sensor)"
-
-
-def delta_bic(n_eff: float, mse_before: float, mse_after: float, added: int) -> float:
-    """BIC with `added` parameters less BIC without, over n_eff independent training samples."""
-    return n_eff * math.log(max(mse_after, 1e-300) / max(mse_before, 1e-300)) + added * math.log(n_eff)
-
-
-def eq7_terms(p: dict) -> dict[str, tuple[tuple[float, tuple[str, str]], ...]]:
-    """eq. (7)'s harmonics: per angle, (order, its cosine and sine coefficients' names)."""
-    return {"theta_m": ((p["omega_w"], ("aw1", "bw1")), (2 * p["omega_w"], ("aw2", "bw2"))),
-            "theta_l": ((p["omega_l"], ("al1", "bl1")),)}
-
-
-def eq7_orders(p: dict) -> dict[str, tuple[float, ...]]:
-    """The angle orders eq. (7) already models in `p`: only those whose
-    coefficients are nonzero. A nominal set without a kinematic-error model
-    (all zero, as a catalogue gives no phase) must leave them to the order
-    search, or the wave generator's two-lobe error can never be found."""
-    return {angle: tuple(order for order, names in pairs if any(p.get(n, 0.0) for n in names))
-            for angle, pairs in eq7_terms(p).items()}
-
-
-def unresolved_harmonics(rec: Recording, p: dict) -> dict[str, str]:
-    """eq. (7) coefficients whose harmonic the recording's travel does not
-    resolve (structure.resolves), each with why. Over a fraction of a
-    period a harmonic's cosine and sine are two smooth curves that take
-    whatever else changes along the travel: on an independent truth's
-    sweep with 1.6 rad of link travel a Bouc-Wen loop four times its
-    size moved bl1 to -14 times nominal, needed held out (24 %)."""
-    out = {}
-    for angle, terms in eq7_terms(p).items():
-        travel = float(np.ptp(getattr(rec, angle)))
-        for order, names in terms:
-            if not resolves(order, travel):
-                why = (f"{angle} travels {travel:.3g} rad ({travel / (2 * math.pi):.2g} revolution), under the "
-                       f"{RESOLVING_PERIODS:g} periods its order {order:g} needs to be told from anything else "
-                       "that changes along the travel")
-                out.update({n: why for n in names})
-    return out
-
-
-def place_offset(rec: Recording, p: dict, reference_torque: np.ndarray) -> dict:
-    """`p` with a0 placed so the transmission's median torsion on `rec` matches
-    the reference torque's: encoder zeros are arbitrary per recording (power
-    cycles, multi-turn counts), and a0 from another recording can put the
-    torsion past eq. (8)'s pole, where every residual is NaN."""
-    from hdjoint import _core
-    est = _core.compliance(parameters.for_estimator(p), rec.i_m, rec.theta_m, rec.theta_l)
-    cf, kf = p["Cf"], p["Kf"]
-    ref_torsion = np.arctan(cf * reference_torque) / (cf * kf) if cf > 1e-12 else reference_torque / kf
-    shift = float(np.nanmedian(est["dtheta_f"] - ref_torsion))
-    return dict(p, a0=p["a0"] + shift)
-
-
-def joined(recordings: list[Recording]) -> tuple[Recording, np.ndarray, np.ndarray, np.ndarray]:
-    """Several recordings of one joint as one analysed recording: each one's
-    analysed windows, one after the other on a continuous time axis. Returns
-    it, the first sample of each contiguous window, each sample's time since
-    its own recording's start, and the fold labels (even fit, odd held out)."""
-    if len({r.tau_sensor is None for r in recordings}) > 1:
-        raise DiagnosisError("the recordings must all have a torque sensor column or none of them")
-    pieces, starts, t_rel, fold = [], [], [], []
-    offset, label = 0, 0
-    for rec in recordings:
-        part, part_starts = sample_windows(rec, ANALYSED_SECONDS / len(recordings), FOLDS)
-        labels = make_folds(len(part), FOLDS) if len(part_starts) == 1 else window_labels(len(part), part_starts)
-        pieces.append(part)
-        starts += list(part_starts + offset)
-        t_rel.append(part.time - rec.time[0])
-        fold.append(labels + label)
-        offset += len(part)
-        label += int(labels.max()) + 1 + int(labels.max() + 1) % 2  # keep even = fit in every recording
-    if len(pieces) == 1:
-        return pieces[0], np.array(starts), t_rel[0], fold[0]
-    step = float(np.median(np.diff(pieces[0].time)))
-    times, end = [], 0.0
-    for part in pieces:
-        times.append(part.time - part.time[0] + end)
-        end = times[-1][-1] + step
-
-    def cat(name):
-        arrays = [getattr(r, name) for r in pieces]
-        return None if arrays[0] is None else np.concatenate(arrays)
-
-    rec = Recording(time=np.concatenate(times), i_m=cat("i_m"), theta_m=cat("theta_m"), theta_l=cat("theta_l"),
-                    tau_sensor=cat("tau_sensor"), extra={}, path=" + ".join(str(r.path) for r in recordings))
-    return rec, np.array(starts), np.concatenate(t_rel), np.concatenate(fold)
-
-
-# Parts with no model term for a constant torque: the current sensor's offset
-# (N*Kt*i_0) and the torque sensor's reach them as a constant that no
-# parameter can take (the transmission's a0 takes it there), and a few
-# hundredths of an ampere of it, traded against Kt, read as structure
-# against the torque level. Their channels against the torque sensor are
-# compared free of their mean over the fit rows (profiled out, like a
-# fitted offset).
-OFFSET_FREE_PARTS = {"motor", "link"}
-
-
-# The offset a current sensor carries, as a share of the largest current it
-# measures in the recording: Hall-effect current transducers state an offset
-# of 0.1-1 % of their nominal current (and a drift of as much with
-# temperature), and a drive's sensor is sized for its peak current.
-CURRENT_OFFSET_SHARE = 0.02
-
-
-def mean_allowance(channel: Channel, p: dict, largest_current: float) -> float:
-    """How much of its mean (N.m) `channel` is compared free of: all of it
-    (inf), none (0), or what the current sensor's offset can give.
-
-    Against a torque sensor: all of the motor's and link's channels' (the
-    sensor's offset and the current's). Without one the motor's channel
-    alone, up to N*Kt times CURRENT_OFFSET_SHARE of the largest current
-    (`largest_current`, A): the current's offset N*Kt*i_0 is the motor
-    side's alone, while a0, the transmission's constant, is shared by both
-    channels. Held to one a0, the link channel took the opposite offset and
-    its gravity term bent to it along the link angle: on the independent
-    truth's controls without a sensor (current offsets up to 0.01 A, 0.045
-    N.m) three of 20 were `unexplained` (torque level, motor speed), all
-    three `consistent` with the truth's offset removed or this channel
-    free of its mean. Only up to a sensor's offset: freed of all of it, the
-    motor channel let a0 take the whole static link torque of LARA8 joint2
-    (80-160 N.m, 10 A of current) and gravity was hidden. The link channel
-    keeps its mean (a0 owns it), so a load that never changes sign stays
-    there: mean-free, that same load was hidden (gravity 31 % held out,
-    not accepted) and the verdict was `consistent`."""
-    if channel.reference == "sensor":
-        return math.inf if channel.parts() & OFFSET_FREE_PARTS else 0.0
-    if "motor" in channel.parts():
-        return abs(p["N"] * p["Kt"]) * CURRENT_OFFSET_SHARE * largest_current
-    return 0.0
-
-
-def _without_mean(r: np.ndarray, over: np.ndarray, allowance: float) -> np.ndarray:
-    """`r` less the mean of `over` (the samples it is taken over), clipped to +-allowance."""
-    return r - float(np.clip(_finite_mean(over), -allowance, allowance))
-
-
-class Evaluator:
-    """Torque estimates and channel residuals for a parameter set, with the
-    estimates of parts whose parameters did not change reused. `offset_rows`:
-    the samples whose mean a channel is compared free of (mean_allowance;
-    default: every finite sample). A channel with the motor's estimate
-    compares nothing where the motor rests (motor_rest.py): 0 there."""
-
-    def __init__(self, prep: Prepared, channels: list[Channel], offset_rows: np.ndarray | None = None):
-        self.prep = prep
-        self.channels = channels
-        self.offset_rows = offset_rows
-        self.motor_rest = motor_at_rest(prep.kin, prep.rec.time, prep.starts)
-        self._cache: dict[str, tuple[tuple, np.ndarray]] = {}
-        self.part_params = {part: depends_on(part) for part in ESTIMATES}
-        current = np.abs(prep.rec.i_m[np.isfinite(prep.rec.i_m)])
-        self.largest_current = float(np.percentile(current, 98)) if len(current) else 0.0
-
-    def estimate(self, part: str, p: dict) -> np.ndarray:
-        if part == "sensor":
-            return self.prep.rec.tau_sensor
-        key = tuple(p.get(n, 0.0) for n in self.part_params[part]) + (self.prep.current_shift,)
-        hit = self._cache.get(part)
-        if hit is not None and hit[0] == key:
-            return hit[1]
-        value = ESTIMATES[part](self.prep, p)
-        self._cache[part] = (key, value)
-        return value
-
-    def reference(self, channel: Channel, p: dict) -> np.ndarray:
-        """The channel's reference over the whole run, through the smoothing
-        filter when the part it is compared with sees the world through it."""
-        reference = self.estimate(channel.reference, p)
-        if channel.part == "transmission" and channel.reference == "sensor" and sharp_transmission(self.prep):
-            return self.prep.sharp_smoothed("tau_sensor", reference)
-        if channel.part in SMOOTHED_PARTS and channel.reference not in SMOOTHED_PARTS:
-            if channel.reference == "sensor":
-                return self.prep.smoothed("tau_sensor", reference)
-            return self.prep.kin.smooth(np.nan_to_num(reference))
-        return reference
-
-    def compared(self, channel: Channel) -> np.ndarray | None:
-        """Where `channel` compares its estimates (None: everywhere)."""
-        return ~self.motor_rest if "motor" in channel.parts() and self.motor_rest.any() else None
-
-    def compared_by_channel(self) -> np.ndarray | None:
-        """(channel, sample): where each channel compares (None: everywhere in every channel)."""
-        masks = [self.compared(c) for c in self.channels]
-        if all(m is None for m in masks):
-            return None
-        return np.stack([np.ones(len(self.motor_rest), bool) if m is None else m for m in masks])
-
-    def part_estimate(self, channel: Channel, p: dict) -> np.ndarray:
-        """The estimate `channel` subtracts, through the smoothing filter when
-        its reference is seen through it (Channel.smooths_part). Without a
-        sensor, the transmission's unsmoothed torque against the motor's
-        smoothed one left tau_T's band above the filter in the residual,
-        which a softer spring shrinks: on the independent truth's controls
-        the calibration put Kf at 0.2-0.4 times the truth's, with an
-        interval that excluded it (0.6-0.8 times smoothed alike)."""
-        value = self.estimate(channel.part, p)
-        if not channel.smooths_part():
-            return value
-        slot = f"{channel.part}@smoothed"
-        hit = self._cache.get(slot)
-        if hit is None or hit[0] is not value:
-            hit = (value, self.prep.kin.smooth(np.nan_to_num(value)))
-            self._cache[slot] = hit
-        return hit[1]
-
-    def residual(self, channel: Channel, p: dict) -> np.ndarray:
-        r = self.reference(channel, p) - self.part_estimate(channel, p)
-        compared = self.compared(channel)
-        allowance = mean_allowance(channel, p, self.largest_current)
-        if allowance > 0:
-            rows = slice(None) if self.offset_rows is None else self.offset_rows
-            r = _without_mean(r, r[rows] if compared is None else r[rows][compared[rows]], allowance)
-        return r if compared is None else np.where(compared, r, 0.0)
-
-    def residual_at(self, channel: Channel, p: dict, index: np.ndarray) -> np.ndarray:
-        """The residual at `index` only: fits look at a sample of the training
-        blocks, and the part being fitted need not be evaluated elsewhere
-        (unless it is smoothed: a filter needs its neighbours)."""
-        if channel.smooths_part():
-            return self.residual(channel, p)[index]
-        key = (id(index), self.prep.current_shift) + tuple(p.get(n, 0.0) for n in self.part_params[channel.part])
-        slot = f"{channel.part}@index"
-        hit = self._cache.get(slot)
-        if hit is None or hit[0] != key:
-            hit = (key, ESTIMATES[channel.part](self.prep, p, index))
-            self._cache[slot] = hit
-        r = self.reference(channel, p)[index] - hit[1]
-        compared = self.compared(channel)
-        compared = None if compared is None else compared[index]
-        allowance = mean_allowance(channel, p, self.largest_current)
-        if allowance > 0:
-            if index is not self.offset_rows:
-                return self.residual(channel, p)[index]
-            r = _without_mean(r, r if compared is None else r[compared], allowance)
-        return r if compared is None else np.where(compared, r, 0.0)
 
 
 def _typical_size(name: str, value: float) -> float:
@@ -364,138 +96,6 @@ def _typical_size(name: str, value: float) -> float:
     floor = info.tolerance_absolute if info.calibrated() else 0.0
     return max(abs(float(value)), floor, 1e-12)
 
-
-def _finite_mean(x: np.ndarray) -> float:
-    x = x[np.isfinite(x)]
-    return float(np.mean(x)) if len(x) else 0.0
-
-
-@dataclass
-class Fit:
-    params: dict
-    names: list[str]
-    cost: float
-    # Posterior std of each fitted parameter: the wider of the two below, times its model-form factor (calibration.py).
-    std: dict = field(default_factory=dict)
-    std_laplace: dict = field(default_factory=dict)
-    std_robust: dict = field(default_factory=dict)
-
-
-@dataclass
-class Hypothesis:
-    """One effect tried in one round of the selection: its fit and evidence."""
-    effect: Effect
-    params_before: dict
-    params_after: dict
-    fitted: list[str]
-    gain: HeldOutGain
-    delta_bic: float
-    orders: list[Order] = field(default_factory=list)
-    # Largest held-out MSE after/before over the effect's channels; for a hypothesis seen on the torsion,
-    # the channels' pooled held-out MSE after/before instead (pooled_ratio), as its gain is not theirs.
-    worst_channel_ratio: float = 1.0
-    pooled_ratio: float | None = None
-    degenerate: str | None = None  # why the fit is not the effect it stands for (Effect.degenerate)
-    p_raw: float = 1.0
-    p_value: float = 1.0  # Benjamini-Hochberg adjusted over the round
-    # An effect uneven over the folds by nature: its pooled held-out gain in standard deviations of the null's.
-    z_against_null: float | None = None
-    # Judged on the encoders' torsion (torsion_orders.py), not on the torque channels: what it was
-    # seen on, and its parameters' intervals from that fit (calibration's refit leaves them alone).
-    seen_on: str | None = None
-    intervals: dict | None = None
-
-    def evidence_z(self) -> float:
-        """The z its acceptance and confidence read: over the folds, or against the null (Effect.uneven_over_folds)."""
-        return self.gain.z if self.z_against_null is None else self.z_against_null
-
-    def pooled_evidence(self) -> dict:
-        """For the record: the z an effect uneven over the folds is judged by (nothing for the others)."""
-        return {} if self.z_against_null is None else {"z_against_null": round(self.z_against_null, 2)}
-
-    def accepted(self) -> bool:
-        return self.p_value <= FALSE_DISCOVERY_RATE and self._held_out_evidence()
-
-    def unconfirmed(self) -> bool:
-        """Explains most of the held-out residual on every other count, but the
-        simulated null cannot tell it from the residual's own colour: a residual
-        made of one slow swing (the LARA8 link channel, 100 N.m over 4 s) makes
-        every smooth hypothesis look like noise. Not a finding, not consistent either."""
-        return self.p_value > FALSE_DISCOVERY_RATE and self.gain.gain >= UNCONFIRMED_GAIN and self._held_out_evidence()
-
-    def explains_as_much_as(self, other: "Hypothesis") -> bool:
-        """Significant, at least `other`'s held-out gain, and every other count of
-        acceptance but steadiness over the folds."""
-        return (self.p_value <= FALSE_DISCOVERY_RATE and self.gain.gain >= other.gain.gain
-                and self._held_out_evidence(steady=False))
-
-    def _held_out_evidence(self, steady: bool = True) -> bool:
-        return (not self.degenerate and self.gain.gain > MIN_GAIN and (not steady or self._steady_over_folds())
-                and self.delta_bic < SEEN_BIC and self.channel_ratio() <= 1.0)
-
-    def channel_ratio(self) -> float:
-        """What the torque channels do held out with it: the worst one's ratio, or their pooled one."""
-        return self.worst_channel_ratio if self.pooled_ratio is None else self.pooled_ratio
-
-    def _steady_over_folds(self) -> bool:
-        """A stationary effect helps most held-out folds, by z > 3 over them. An
-        effect uneven over the folds by nature (Effect.uneven_over_folds: a
-        drift, a dead zone) is judged by its pooled gain against the
-        simulated null, which is its p-value restated, so the p-value alone
-        decides (docs/diagnosis_measurements.md, "Thermal drift of Kt: the law
-        and its test" and "Reversals judged pooled", for the false alarms this gives on controls)."""
-        if self.z_against_null is not None:
-            return True
-        return steady_over_folds(self.gain)
-
-
-@dataclass
-class Finding:
-    """An accepted hypothesis ("added"), a look-alike set ("ambiguous"), or a
-    calibrated effect beyond its tolerance ("resized")."""
-    effect: Effect
-    kind: str
-    params_before: dict
-    params_after: dict
-    fitted: list[str]
-    p_value: float
-    confidence: float
-    hypothesis: Hypothesis | None = None      # the test behind an added / ambiguous finding
-    alternatives: list[Hypothesis] = field(default_factory=list)  # its look-alikes, for "ambiguous"
-    runner_up: Hypothesis | None = None
-    resized: list[Calibrated] = field(default_factory=list)
-    resize_gain: HeldOutGain | None = None  # what the resize predicts held out (held at its tolerance against not)
-    steady_evidence: SteadyEvidence | None = None  # a Stribeck finding's gain at held speeds (friction_lookalike.py)
-
-    @property
-    def orders(self) -> list[Order]:
-        return self.hypothesis.orders if self.hypothesis else []
-
-    def named(self) -> list[str]:
-        """The effect and its look-alikes: what this finding names."""
-        return [self.effect.id] + [h.effect.id for h in self.alternatives]
-
-
-@dataclass
-class DiagnosisResult:
-    """What a diagnosis found, for findings.py and report.py to read."""
-    engine: "Diagnosis"               # residuals and signals, for figures and figures of merit
-    nominal: dict
-    calibrated_params: dict           # after calibration, before any finding
-    params: dict                      # the corrected set
-    findings: list[Finding]
-    calibration: dict[str, Calibrated]
-    tested: list[list[dict]]
-    not_testable: list[dict]
-    sigma: dict[str, float]
-    located: list[dict] = field(default_factory=list)
-    unexplained: list[dict] = field(default_factory=list)
-    orders_not_found: list[dict] = field(default_factory=list)
-    limits: list = field(default_factory=list)  # detection_limit.Limit per effect tested and not accepted
-
-    @property
-    def beyond_tolerance(self) -> list[Calibrated]:
-        return [c for c in self.calibration.values() if c.beyond_tolerance]
 
 
 class Diagnosis:
@@ -1055,7 +655,7 @@ class Diagnosis:
                 break
             best = accepted[0]
             others = [h for h in tried if h is not best]
-            finding = _finding_for(best, others)
+            finding = finding_for(best, others)
             if best.effect.id == "stribeck_friction" and EFFECTS["coulomb_friction"].is_on(self.nominal):
                 finding = self._stribeck_or_smoothing(finding)
             self.say(f"found {finding.effect.id} ({finding.kind}): held-out gain {100 * best.gain.gain:.1f} %, "
@@ -1092,7 +692,7 @@ class Diagnosis:
                             gain=replace(h.gain, gain=h.gain.gain * (1.0 - steady.steady_share)), orders=[])
         alternatives = [a for a in finding.alternatives if a.effect.id != "coulomb_friction"] + [lookalike]
         share = h.gain.gain / (h.gain.gain + sum(max(a.gain.gain, 0.0) for a in alternatives))
-        confidence = _confidence(h) * share
+        confidence = confidence_of(h) * share
         return replace(finding, kind="ambiguous", alternatives=alternatives, confidence=round(confidence, 3))
 
     def unconfirmed_structure(self) -> list[dict]:
@@ -1175,6 +775,7 @@ class Diagnosis:
         return replace(finding, kind="ambiguous", alternatives=rivals, confidence=round(finding.confidence * share, 3))
 
 
+
 def _why_no_order(effect: Effect, strongest: Order | None) -> str:
     if strongest is not None and strongest.channel == TORSION_VIEW:
         return (f"on {TORSION_VIEW}, no order of " + " or ".join(effect.order_angles) + " passes (held-out gain "
@@ -1194,41 +795,3 @@ def _why_no_order(effect: Effect, strongest: Order | None) -> str:
     return why + f"{head} stands out of the spectrum but predicts too little held out"
 
 
-def _separated(best: Hypothesis, rival: Hypothesis) -> bool:
-    """The better hypothesis explains clearly more held-out structure than the rival, fold by fold."""
-    clearly = fold_z(best.gain.fold_gains - rival.gain.fold_gains) > SEPARATED_Z
-    return bool(clearly and rival.gain.gain <= SEPARATED_RATIO * best.gain.gain)
-
-
-def _rival(best: Hypothesis, other: Hypothesis) -> bool:
-    """A look-alike of the best that explains the same structure, not clearly
-    less of it: accepted on its own, or explaining at least as much held out
-    and significant against the simulated null, though uneven over the folds.
-    Naming the best alone would then be a confident name the data do not
-    single out: on the independent truth's multisine a wave-generator
-    compliance at 4 times its concealed size came out as backlash (added,
-    0.4 % held out), while the compliance's own terms took 0.8 % (p = 6e-5,
-    13 of 20 folds)."""
-    if not best.effect.looks_like(other.effect):
-        return False
-    return (other.accepted() or other.explains_as_much_as(best)) and not _separated(best, other)
-
-
-def _confidence(h: Hypothesis) -> float:
-    """A finding's confidence before sharing it with look-alikes: how far its
-    held-out z (Hypothesis.evidence_z) clears 2, times one less its multiplicity-corrected p-value."""
-    return float(norm.cdf(h.evidence_z() - 2.0)) * (1.0 - h.p_value)
-
-
-def _finding_for(best: Hypothesis, others: list[Hypothesis]) -> Finding:
-    """An added finding, or an ambiguous one when a look-alike explains the same
-    structure and is significant on its own."""
-    rivals = [o for o in others if _rival(best, o)]
-    runner_up = others[0] if others else None
-    confidence = _confidence(best)
-    if not rivals:
-        return Finding(best.effect, "added", best.params_before, best.params_after, best.fitted, best.p_value,
-                       round(confidence, 3), best, runner_up=runner_up)
-    share = best.gain.gain / (best.gain.gain + sum(r.gain.gain for r in rivals))
-    return Finding(best.effect, "ambiguous", best.params_before, best.params_after, best.fitted, best.p_value,
-                   round(confidence * share, 3), best, alternatives=rivals, runner_up=runner_up)

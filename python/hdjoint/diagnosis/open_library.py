@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 from sklearn.linear_model import orthogonal_mp_gram
 
+from hdjoint.diagnosis.rules import EVIDENCE_Z, PROPOSAL_MIN_GAIN
 from hdjoint.diagnosis.structure import held_out_gain_sq
 
 MAX_TERMS = 4

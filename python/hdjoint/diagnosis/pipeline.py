@@ -9,7 +9,8 @@ from typing import Callable
 from threadpoolctl import threadpool_limits
 
 from hdjoint.diagnosis.detection_limit import detection_limits
-from hdjoint.diagnosis.engine import Diagnosis, DiagnosisResult
+from hdjoint.diagnosis.engine import Diagnosis
+from hdjoint.diagnosis.results import DiagnosisResult
 from hdjoint.diagnosis.findings import document, remaining_structure
 from hdjoint.diagnosis.open_library import propose_terms
 from hdjoint.io.recording import Recording

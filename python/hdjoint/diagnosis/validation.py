@@ -20,7 +20,8 @@ import numpy as np
 
 from hdjoint.diagnosis.part_torques import Prepared
 from hdjoint.diagnosis.current_alignment import fit_shift
-from hdjoint.diagnosis.engine import Evaluator, channels_for, check_recording, place_offset
+from hdjoint.diagnosis.channels import Evaluator, channels_for
+from hdjoint.diagnosis.prepare import check_recording, place_offset
 from hdjoint.diagnosis.findings import estimator_comparison
 from hdjoint.estimation.metrics import error_figures
 from hdjoint.diagnosis.operating_range import beyond_fitted_range

@@ -26,7 +26,7 @@ def diagnose_to_directory(recording, params, out, validate=(), time_unit: str | 
     import tempfile
     from hdjoint.io import parameters
     from hdjoint.diagnosis import report
-    from hdjoint.diagnosis.engine import DiagnosisError
+    from hdjoint.diagnosis.prepare import DiagnosisError
     from hdjoint.diagnosis.pipeline import diagnose
     from hdjoint.diagnosis.validation import validate as validate_on
     paths = [recording] if isinstance(recording, (str, Path)) else list(recording)
