@@ -14,7 +14,7 @@ friction is LuGre.
 The raw intervals (Laplace, sandwich) are too narrow where the truth's
 form differs (bias, not noise): --fit-factors A-B sets each parameter's
 model-form factor, the 95th percentile of abs(error) / std over seeds A-B
-divided by 1.96 (at least 1), and writes python/hdjoint/model_form_factors.json,
+divided by 1.96 (at least 1), and writes python/hdjoint/diagnosis/model_form_factors.json,
 which the diagnosis then multiplies its intervals by; the coverage that
 counts is the one on the other seeds.
 
@@ -43,7 +43,7 @@ Z95 = 1.959964
 UNDEFINED = ("a0", "wg_load")
 RAW = RESULTS_DIR / "interval_coverage.jsonl"
 # The source tree's copy (the installed package reads the one the wheel carries).
-FACTORS = Path(__file__).resolve().parents[1] / "python" / "hdjoint" / "model_form_factors.json"
+FACTORS = Path(__file__).resolve().parents[1] / "python" / "hdjoint" / "diagnosis" / "model_form_factors.json"
 
 
 def true_value(name: str, joint) -> float | None:
