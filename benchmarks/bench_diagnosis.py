@@ -22,9 +22,10 @@ import time
 
 from results import ResultsPage
 
-from hdjoint import experiments, parameters, recording
-from hdjoint.diagnosis import diagnose
-from hdjoint.forked import available_cores
+from hdjoint.fmu import experiments
+from hdjoint.io import parameters, recording
+from hdjoint.diagnosis.pipeline import diagnose
+from hdjoint.diagnosis.forked import available_cores
 
 CACHE = pathlib.Path(__file__).resolve().parent.parent / "build" / "bench"
 
@@ -44,7 +45,7 @@ def simulated(experiment: str, seconds: float) -> pathlib.Path:
 def time_cli(path: pathlib.Path, params: pathlib.Path) -> float:
     with tempfile.TemporaryDirectory() as out:
         start = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "hdjoint.cli", "diagnose", str(path), "--params", str(params),
+        subprocess.run([sys.executable, "-m", "hdjoint.app.cli", "diagnose", str(path), "--params", str(params),
                         "--out", out], check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         return time.perf_counter() - start
 

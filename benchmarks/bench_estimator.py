@@ -17,9 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
-from hdjoint import _core, experiments, parameters
-from hdjoint.fmu_runner import run_estimator_fmu
-from hdjoint.recording import read_recording, write_recording
+from hdjoint import _core
+from hdjoint.fmu import experiments
+from hdjoint.io import parameters
+from hdjoint.fmu.runner import run_estimator_fmu
+from hdjoint.io.recording import read_recording, write_recording
 from results import ResultsPage
 
 
@@ -70,7 +72,7 @@ def main():
         read_s = best_of(lambda: read_recording(path), 3)
         print(f"reading the 58 s recording's CSV:       {read_s:8.3f} s  ({steps / read_s:,.0f} rows/s, checked)")
         for engine in ("fmu", "batch"):
-            cmd = [sys.executable, "-m", "hdjoint.cli", "estimate", str(path), "--engine", engine,
+            cmd = [sys.executable, "-m", "hdjoint.app.cli", "estimate", str(path), "--engine", engine,
                    "-o", str(Path(tmp) / "est.csv")]
             wall = best_of(lambda: subprocess.run(cmd, check=True, capture_output=True), 3)
             print(f"`hdjoint estimate` 58 s, --engine {engine:5s}: {wall:8.2f} s (whole command, incl. start-up)")

@@ -11,7 +11,7 @@ import time
 
 import numpy as np
 
-from hdjoint import cosim
+from hdjoint.fmu import cosim
 
 SMOOTH = {"joint.motor_counts": 0.0, "joint.link_counts": 0.0}
 LINK_COUNT = 2 * np.pi / 524288

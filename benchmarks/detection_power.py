@@ -3,7 +3,7 @@ independent benchmark (diagnosis_independent.py) conceals each effect at
 about the noise and quantisation level, where the detectability oracle
 (effect_detectability.py) showed that some recordings cannot reveal it. Here
 the same joints (same seeds, same model form, same sensors and excitations)
-carry the effect at 1, 2 and 4 times that size (hdjoint.truth.cases.draw's
+carry the effect at 1, 2 and 4 times that size (hdjoint_truth.cases.draw's
 `size`), and each first recording goes through `hdjoint diagnose` against
 the nominal set, as in the benchmark.
 
@@ -22,8 +22,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from hdjoint import parameters
-from hdjoint.truth.cases import EFFECT_CASES, draw, record
+from hdjoint.io import parameters
+from hdjoint_truth.cases import EFFECT_CASES, draw, record
 
 import diagnosis_independent as independent
 

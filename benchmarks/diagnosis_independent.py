@@ -1,4 +1,4 @@
-"""The diagnosis on an independent truth (hdjoint.truth: Python, not the
+"""The diagnosis on an independent truth (hdjoint_truth: Python, not the
 project's C++ joint, with its model form drawn per seed): every effect ID
 concealed one, two or three at a time, controls on every excitation kind,
 and closure: the corrected params.json used as the nominal set for a second
@@ -21,11 +21,11 @@ import time
 from datetime import datetime, timezone
 from pathlib import Path
 
-from hdjoint import parameters
-from hdjoint.effects import EFFECTS
-from hdjoint.jobs import diagnose_to_directory
-from hdjoint.recording import write_recording
-from hdjoint.truth.cases import CONTROL_CASES, EFFECT_CASES, TruthCase, draw, record
+from hdjoint.io import parameters
+from hdjoint.diagnosis.effects import EFFECTS
+from hdjoint.jobs.diagnose import diagnose_to_directory
+from hdjoint.io.recording import write_recording
+from hdjoint_truth.cases import CONTROL_CASES, EFFECT_CASES, TruthCase, draw, record
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "docs" / "results" / "diagnosis_independent.jsonl"

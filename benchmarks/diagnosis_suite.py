@@ -1,4 +1,4 @@
-"""The diagnosis on concealed effects: for every case of hdjoint.cases
+"""The diagnosis on concealed effects: for every case of hdjoint.fmu.concealed_effects
 (every effect ID, several at once, and controls), simulate the joint,
 diagnose it against the nominal model, and print
   - the confusion table (effect named vs effect present),
@@ -7,7 +7,7 @@ diagnose it against the nominal model, and print
   - the time per case.
 Run: python benchmarks/diagnosis_suite.py [--duration 30] [--markdown]
 
---independent: the same questions on an independent truth (hdjoint.truth,
+--independent: the same questions on an independent truth (hdjoint_truth,
 not the project's own joint), several seeds, closure on a second recording;
 see diagnosis_independent.py. Resumable and splittable:
   python benchmarks/diagnosis_suite.py --independent --seeds 3 [--cases NAME] [--which controls]
@@ -20,9 +20,9 @@ import json
 import pathlib
 import time
 
-from hdjoint.cases import CASES, nominal_for, record
-from hdjoint.diagnosis import diagnose
-from hdjoint.effects import EFFECTS
+from hdjoint.fmu.concealed_effects import CASES, nominal_for, record
+from hdjoint.diagnosis.pipeline import diagnose
+from hdjoint.diagnosis.effects import EFFECTS
 
 
 def run_case(case, duration):
@@ -37,7 +37,7 @@ def main():
     ap.add_argument("--duration", type=float, default=30.0, help="seconds per recording")
     ap.add_argument("--only", help="run only cases whose name contains this")
     ap.add_argument("--save", type=pathlib.Path, help="write each case's findings.json into this folder")
-    ap.add_argument("--independent", action="store_true", help="run on the independent truth (hdjoint.truth)")
+    ap.add_argument("--independent", action="store_true", help="run on the independent truth (hdjoint_truth)")
     ap.add_argument("--seeds", type=int, default=3, help="--independent: seeds 0..SEEDS-1")
     ap.add_argument("--first-seed", type=int, default=0, help="--independent: start at this seed")
     ap.add_argument("--cases", help="--independent: run only cases whose name contains this")

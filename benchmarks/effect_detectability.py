@@ -25,11 +25,11 @@ from pathlib import Path
 
 from threadpoolctl import threadpool_limits
 
-from hdjoint import parameters
-from hdjoint.diagnosis import Diagnosis
-from hdjoint.effects import EFFECTS
-from hdjoint.recording import read_recording, write_recording
-from hdjoint.truth.cases import EFFECT_CASES, draw, record
+from hdjoint.io import parameters
+from hdjoint.diagnosis.engine import Diagnosis
+from hdjoint.diagnosis.effects import EFFECTS
+from hdjoint.io.recording import read_recording, write_recording
+from hdjoint_truth.cases import EFFECT_CASES, draw, record
 
 import diagnosis_independent as independent
 

@@ -31,7 +31,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def write_long_recording(path: Path, rows: int) -> None:
     """A joint moving through a slow sine with a torque ripple, written in blocks."""
-    from hdjoint.recording import CsvWriter
+    from hdjoint.io.recording import CsvWriter
     rng = np.random.default_rng(1)
     names = ("time", "i_m", "theta_m", "theta_l", "tau_sensor")
     with CsvWriter(path, names) as out:
@@ -95,7 +95,7 @@ def main(argv=None) -> int:
             for run in paths:
                 engine, smooth = run.split("+")[0], run.endswith("+smooth")
                 out = work / f"est-{engine}.csv"
-                mb, seconds, code = peak_rss([sys.executable, "-m", "hdjoint.cli", "estimate", str(rec),
+                mb, seconds, code = peak_rss([sys.executable, "-m", "hdjoint.app.cli", "estimate", str(rec),
                                               "--engine", engine, *(["--smooth"] if smooth else []),
                                               "-o", str(out)], env)
                 rows.append((label, run, mb, mb / size, seconds, code))

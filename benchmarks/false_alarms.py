@@ -1,4 +1,4 @@
-"""False-alarm rate of the diagnosis on controls: joints of hdjoint.cases
+"""False-alarm rate of the diagnosis on controls: joints of hdjoint.fmu.concealed_effects
 with nothing missing from the nominal model (only its few-percent parameter
 errors), over seeds and excitations; a control's diagnosis is a false alarm
 unless its verdict is `consistent`. Writes docs/results/false_alarms.md (or --out)
@@ -15,8 +15,8 @@ import platform
 import time
 from concurrent.futures import ProcessPoolExecutor
 
-from hdjoint.cases import CASES, nominal_for, record
-from hdjoint.diagnosis import diagnose
+from hdjoint.fmu.concealed_effects import CASES, nominal_for, record
+from hdjoint.diagnosis.pipeline import diagnose
 
 OUT = pathlib.Path(__file__).resolve().parent.parent / "docs" / "results" / "false_alarms.md"
 

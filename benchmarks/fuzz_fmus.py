@@ -24,7 +24,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "fuzz"))
 
 from fmi_fuzzer import CATEGORIES, FMU_NAMES, Campaign, summarise  # noqa: E402
-from hdjoint.fmus import fmu_path  # noqa: E402
+from hdjoint.fmu.shipped import fmu_path  # noqa: E402
 
 
 def fuzz_one(campaign: Campaign, name: str, sequences: int, timeout: float, out: Path) -> None:

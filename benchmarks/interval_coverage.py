@@ -1,6 +1,6 @@
 """How often the calibration's 95 % intervals contain the truth.
 
-On the independent truth (hdjoint.truth: its own friction law and
+On the independent truth (hdjoint_truth: its own friction law and
 smoothing, integrator, sensor chain, structural damping, parameters off by
 up to 10 %), controls on every excitation kind: calibrate the nominal model
 (the diagnosis's first step) and check, for every calibrated parameter
@@ -36,8 +36,8 @@ import numpy as np
 from results import RESULTS_DIR, ResultsPage
 from threadpoolctl import threadpool_limits
 
-from hdjoint.diagnosis import Diagnosis
-from hdjoint.truth.cases import CONTROL_CASES, draw, record
+from hdjoint.diagnosis.engine import Diagnosis
+from hdjoint_truth.cases import CONTROL_CASES, draw, record
 
 Z95 = 1.959964
 UNDEFINED = ("a0", "wg_load")

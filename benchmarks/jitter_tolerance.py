@@ -29,7 +29,7 @@ ESTIMATES = ("tau_compliance", "tau_ukf", "tau_hat")
 
 def jittered(fine, jitter: float, rng):
     """Rows of FINE nearest to k*STEP + u_k (u_k uniform in +-jitter*STEP/2), strictly increasing."""
-    from hdjoint.recording import Recording
+    from hdjoint.io.recording import Recording
     n = int((fine.time[-1] - STEP) / STEP)
     wanted = np.arange(1, n) * STEP + rng.uniform(-0.5, 0.5, n - 1) * jitter * STEP
     index = np.unique(np.clip(np.rint(wanted / FINE_STEP).astype(int), 0, len(fine) - 1))
@@ -38,9 +38,9 @@ def jittered(fine, jitter: float, rng):
 
 
 def main(argv=None) -> int:
-    from hdjoint import experiments
-    from hdjoint.estimate_job import Options, estimate_to_file
-    from hdjoint.recording import write_recording
+    from hdjoint.fmu import experiments
+    from hdjoint.jobs.estimate import Options, estimate_to_file
+    from hdjoint.io.recording import write_recording
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration", type=float, default=10.0)
     ap.add_argument("--seeds", type=int, default=3)

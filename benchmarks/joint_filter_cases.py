@@ -3,7 +3,7 @@ compliance model and the paper's UKF, on recordings the estimators never
 fitted. Prints the README's table.
 
 Each case simulates HarmonicDriveJoint.fmu under the PD position controller
-of `hdjoint.experiments` on one excitation (the paper's sinusoid, a
+of `hdjoint.fmu.experiments` on one excitation (the paper's sinusoid, a
 multisine, slow moves with dwells, a chirp), with an external torque on the
 link that neither controller nor estimators know (payload steps, contact
 pushes), default or coarse encoders, and in some cases Bouc-Wen transmission
@@ -13,7 +13,7 @@ transmitted torque, wg_load = 1), a link model that is a few percent off
 (`LINK_MODEL_ERROR`) and the encoders' resolutions.
 
 Tuning, the same for both filters: a grid search over their noise settings
-(`hdjoint.tuning`) on a separate tuning recording per encoder set (two sines
+(`tuning`) on a separate tuning recording per encoder set (two sines
 at 0.2 and 0.7 Hz, other payload steps and contact pushes, other noise seed;
 not a test recording), against its torque sensor. The compliance model has nothing to tune.
 
@@ -44,8 +44,11 @@ from pathlib import Path
 
 import numpy as np
 
-from hdjoint import _core, experiments, parameters, tuning
-from hdjoint.metrics import error_figures
+from hdjoint import _core
+from hdjoint.fmu import experiments
+from hdjoint.io import parameters
+import tuning
+from hdjoint.estimation.metrics import error_figures
 
 ENCODERS = {
     "default": {"motor_counts": 4096.0, "link_counts": 524288.0},   # 1024 lines x4, 19 bit
@@ -177,9 +180,9 @@ def coverage_table(results) -> list[str]:
 def model_is_wrong(duration: float) -> list[str]:
     """The paper's approximation of the wave generator load against a joint that
     does not follow it: estimates with the nominal file and with the diagnosed one."""
-    from hdjoint import cli
-    from hdjoint.cases import CASES, nominal_for, record
-    from hdjoint.recording import write_recording
+    from hdjoint.app import cli
+    from hdjoint.fmu.concealed_effects import CASES, nominal_for, record
+    from hdjoint.io.recording import write_recording
     case = next(c for c in CASES if c.present == ("wave_generator_load",))
     bench, run = record(case, duration=duration), record(dataclasses.replace(case, seed=23), duration=duration)
     truth = run.extra["tau_joint"]

@@ -8,7 +8,7 @@ Runs the shipped SSP systems through fmpy (fmpy.ssp.simulate_ssp), 10 s at
   JTF on tau_hat         JointTorqueFeedbackHat.ssp (tau_fb <- estimator.tau_hat, the joint-state filter)
   JTF on the true torque JointTorqueFeedbackSensor.ssp (tau_fb <- joint.tau_joint)
 on the nominal joint (the estimator's own parameters) and on a joint that
-differs from them as real ones do (hdjoint.experiments.TRUE_JOINT_DEVIATIONS).
+differs from them as real ones do (hdjoint.fmu.experiments.TRUE_JOINT_DEVIATIONS).
 Prints the table (link position error, torque tracking tau_d - tau_joint,
 the estimator's error) and writes docs/jtf_cosim.png.
 
@@ -21,8 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from hdjoint import cosim
-from hdjoint.experiments import TRUE_JOINT_DEVIATIONS
+from hdjoint.fmu import cosim
+from hdjoint.fmu.experiments import TRUE_JOINT_DEVIATIONS
 
 STOP, STEP = 10.0, 1e-3
 SKIP = 1.0          # s of start-up left out of the figures
@@ -41,7 +41,7 @@ FED_BACK = {"JointTorqueFeedbackHat": "estimator.tau_hat"}
 
 
 def true_joint() -> dict[str, float]:
-    from hdjoint import parameters
+    from hdjoint.io import parameters
     nominal = parameters.defaults()
     return {f"joint.{k}": nominal[k] * f for k, f in TRUE_JOINT_DEVIATIONS.items()}
 

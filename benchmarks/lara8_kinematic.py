@@ -40,8 +40,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from lara8_table import DATA, JOINTS, K1, KT, TOOTH_RATIO, generated_by, halves, markdown_table, read_joint  # noqa: E402
 from lara8_torsion import regress  # noqa: E402
 
-from hdjoint import parameters, torsion_orders  # noqa: E402
-from hdjoint.signals import folds  # noqa: E402
+from hdjoint.io import parameters  # noqa: E402
+from hdjoint.diagnosis import torsion_orders
+from hdjoint.diagnosis.kinematics import folds  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 TABLE = ROOT / "docs" / "results" / "lara8_kinematic.md"

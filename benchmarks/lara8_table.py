@@ -33,13 +33,14 @@ from scipy.optimize import minimize_scalar
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from diagnosis_independent import _commit, _machine  # noqa: E402  (the same stamp on every table)
 
-from hdjoint import parameters  # noqa: E402
-from hdjoint.channels import Prepared  # noqa: E402
-from hdjoint.effects import KINEMATIC_EQ7  # noqa: E402
-from hdjoint.jobs import UserError, diagnose_to_directory  # noqa: E402
-from hdjoint.recording import read_recording, write_recording  # noqa: E402
-from hdjoint.signals import kinematics  # noqa: E402
-from hdjoint.validation import validate  # noqa: E402
+from hdjoint.io import parameters  # noqa: E402
+from hdjoint.diagnosis.part_torques import Prepared  # noqa: E402
+from hdjoint.diagnosis.effects import KINEMATIC_EQ7  # noqa: E402
+from hdjoint.jobs.inputs import UserError  # noqa: E402
+from hdjoint.jobs.diagnose import diagnose_to_directory
+from hdjoint.io.recording import read_recording, write_recording  # noqa: E402
+from hdjoint.diagnosis.kinematics import kinematics  # noqa: E402
+from hdjoint.diagnosis.validation import validate  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 # ../shared/data/lara8 beside the main checkout (a worktree sits one level deeper); the copy the

@@ -30,10 +30,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from lara8_table import CURRENT_SIGN, DATA, K1, KT, TOOTH_RATIO, gear_ratio, generated_by, \
     markdown_table  # noqa: E402
 
-from hdjoint import parameters  # noqa: E402
-from hdjoint.recording import read_recording  # noqa: E402
-from hdjoint.signals import kinematics  # noqa: E402
-from hdjoint.torsion_orders import correlation_length  # noqa: E402
+from hdjoint.io import parameters  # noqa: E402
+from hdjoint.io.recording import read_recording  # noqa: E402
+from hdjoint.diagnosis.kinematics import kinematics  # noqa: E402
+from hdjoint.diagnosis.torsion_orders import correlation_length  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 TABLE = ROOT / "docs" / "results" / "lara8_torsion.md"

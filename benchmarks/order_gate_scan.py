@@ -20,9 +20,9 @@ import time
 
 from threadpoolctl import threadpool_limits
 
-from hdjoint.diagnosis import Diagnosis
-from hdjoint.structure import DOMINANT_GAIN
-from hdjoint.truth.cases import CONTROL_CASES, EFFECT_CASES, draw, record
+from hdjoint.diagnosis.engine import Diagnosis
+from hdjoint.diagnosis.rules import DOMINANT_GAIN
+from hdjoint_truth.cases import CONTROL_CASES, EFFECT_CASES, draw, record
 
 import diagnosis_independent as independent
 

@@ -15,8 +15,8 @@ from dataclasses import replace
 
 from threadpoolctl import threadpool_limits
 
-from hdjoint.diagnosis import diagnose
-from hdjoint.truth.cases import CONTROL_CASES, draw, record
+from hdjoint.diagnosis.pipeline import diagnose
+from hdjoint_truth.cases import CONTROL_CASES, draw, record
 
 import diagnosis_independent as independent
 

@@ -16,9 +16,9 @@ import time
 
 from threadpoolctl import threadpool_limits
 
-from hdjoint.diagnosis import Diagnosis
-from hdjoint.truth import cases as tc
-from hdjoint.truth.simulate import simulate
+from hdjoint.diagnosis.engine import Diagnosis
+from hdjoint_truth import cases as tc
+from hdjoint_truth.simulate import simulate
 from results import ResultsPage
 
 VARIANTS = {

@@ -25,9 +25,9 @@ from pathlib import Path
 
 from threadpoolctl import threadpool_limits
 
-from hdjoint.diagnosis import Diagnosis
-from hdjoint.effects import EFFECTS
-from hdjoint.truth.cases import CONTROL_CASES, EFFECT_CASES, draw, record
+from hdjoint.diagnosis.engine import Diagnosis
+from hdjoint.diagnosis.effects import EFFECTS
+from hdjoint_truth.cases import CONTROL_CASES, EFFECT_CASES, draw, record
 
 import diagnosis_independent as independent
 

@@ -16,10 +16,10 @@ import dataclasses
 
 import numpy as np
 
-from hdjoint.diagnosis import Diagnosis
-from hdjoint.effects import EFFECTS
-from hdjoint.structure import held_out_gain_sq
-from hdjoint.truth import cases as tc
+from hdjoint.diagnosis.engine import Diagnosis
+from hdjoint.diagnosis.effects import EFFECTS
+from hdjoint.diagnosis.structure import held_out_gain_sq
+from hdjoint_truth import cases as tc
 
 
 def truth_values(effect: str, joint) -> dict:
@@ -36,7 +36,7 @@ def truth_values(effect: str, joint) -> dict:
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("case", help="a substring of an effect case's name (hdjoint.truth.cases)")
+    ap.add_argument("case", help="a substring of an effect case's name (hdjoint_truth.cases)")
     ap.add_argument("seed", type=int)
     ap.add_argument("effect", help="the effect ID to try at the truth's size")
     args = ap.parse_args()

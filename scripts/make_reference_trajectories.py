@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 from fmpy import simulate_fmu
 
-from hdjoint import experiments
-from hdjoint.fmus import fmu_path
-from hdjoint.recording import write_csv
+from hdjoint.fmu import experiments
+from hdjoint.fmu.shipped import fmu_path
+from hdjoint.io.recording import write_csv
 
 DATA = Path(__file__).resolve().parent.parent / "tests" / "data"
 STEP = 1e-3

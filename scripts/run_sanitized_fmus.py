@@ -39,9 +39,10 @@ def main(build_dir: str) -> int:
               file=sys.stderr)
         return 2
     from fmpy import simulate_fmu
-    from hdjoint import experiments, parameters
-    from hdjoint.cosim import run_fmpy
-    from hdjoint.fmu_runner import run_estimator_fmu
+    from hdjoint.fmu import experiments
+    from hdjoint.io import parameters
+    from hdjoint.fmu.cosim import run_fmpy
+    from hdjoint.fmu.runner import run_estimator_fmu
 
     build = Path(build_dir)
     for name in FMUS:

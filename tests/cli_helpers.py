@@ -7,7 +7,7 @@ import shutil
 import numpy as np
 import pytest
 
-from hdjoint.cli import main
+from hdjoint.app.cli import main
 
 
 def read_csv(path):

@@ -22,11 +22,11 @@ from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFr
                        fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
 
 import hdjoint  # noqa: E402
-from hdjoint import parameters  # noqa: E402
-from hdjoint.fmus import fmu_path  # noqa: E402
+from hdjoint.io import parameters  # noqa: E402
+from hdjoint.fmu.shipped import fmu_path  # noqa: E402
 # Each FMU's inputs and outputs, from its C++ signal table (not retyped here).
-from hdjoint.fmu_runner import (CONTROLLER_INPUTS, CONTROLLER_OUTPUTS, ESTIMATOR_INPUTS,  # noqa: E402,F401
-                                ESTIMATOR_OUTPUTS, JOINT_INPUTS, JOINT_OUTPUTS)
+from hdjoint.fmu.runner import (CONTROLLER_INPUTS, CONTROLLER_OUTPUTS, ESTIMATOR_INPUTS, ESTIMATOR_OUTPUTS,
+    JOINT_INPUTS, JOINT_OUTPUTS)
 
 ESTIMATOR = "JointTorqueEstimator"
 JOINT = "HarmonicDriveJoint"
@@ -206,13 +206,13 @@ def estimator_params(default_params) -> dict[str, float]:
 @pytest.fixture(scope="session")
 def recording():
     """3 s of the paper experiment at 1 kHz (the joint FMU under closed-loop control)."""
-    from hdjoint import experiments
+    from hdjoint.fmu import experiments
     return experiments.run("paper", duration=3.0)
 
 
 @pytest.fixture
 def recording_csv(recording, tmp_path) -> Path:
-    from hdjoint.recording import write_recording
+    from hdjoint.io.recording import write_recording
     path = tmp_path / "rec.csv"
     write_recording(path, recording)
     return path

@@ -3,7 +3,7 @@ as JointTorqueFeedback.ssp and OspSystemStructure.xml) run unchanged by
 independent masters: fmpy (fmpy.ssp.simulate_ssp), libcosim (libcosimpy,
 from the SSP and from the OSP structure), ecos (ecospy) and INTO-CPS Maestro
 3.1.1 (its jar). Each external master runs in a child process
-(hdjoint.cosim.run_in_subprocess) with a timeout: libcosim and ecos can abort
+(hdjoint.fmu.cosim.run_in_subprocess) with a timeout: libcosim and ecos can abort
 their process on models they dislike.
 
 What the masters share and where they differ, and so the tolerances:
@@ -41,7 +41,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hdjoint import cosim
+from hdjoint.fmu import cosim
 
 pytestmark = pytest.mark.slow  # five masters, Maestro's JVM among them
 
@@ -173,7 +173,7 @@ def test_fmpy_simulate_fmu_runs_each_fmu_alone(name):
     """fmpy's one-call simulate_fmu on each FMU with its defaults (inputs at
     their start values), with a step of floating-point noise."""
     from fmpy import simulate_fmu
-    from hdjoint.fmus import fmu_path
+    from hdjoint.fmu.shipped import fmu_path
     result = simulate_fmu(str(fmu_path(name)), stop_time=2.5, step_size=0.0009999999999976694,
                           output_interval=0.0009999999999976694)
     outputs = [n for n in result.dtype.names if n != "time"]
@@ -226,7 +226,7 @@ def test_ssp_keeps_to_the_subset_every_master_reads(name):
 def test_ssp_names_omsimulators_master_at_the_fmus_sample_period(name):
     """OMSimulator refuses a system without its own FixedStepMaster annotation
     (issue 12); the other masters ignore it (the tests above run the same files)."""
-    from hdjoint import parameters
+    from hdjoint.io import parameters
     with zipfile.ZipFile(cosim.ssp_path(name)) as z:
         root = ET.fromstring(z.read("SystemStructure.ssd"))
     ssd = "{http://ssp-standard.org/SSP1/SystemStructureDescription}"

@@ -6,7 +6,7 @@ desired one better than with the loop closed on the paper's tau_ukf."""
 import numpy as np
 import pytest
 
-from hdjoint import cosim
+from hdjoint.fmu import cosim
 
 rms = lambda x: float(np.sqrt(np.mean(np.square(x))))  # noqa: E731
 

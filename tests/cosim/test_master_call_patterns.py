@@ -17,8 +17,8 @@ import math
 import numpy as np
 import pytest
 
-from hdjoint.fmu_runner import FmuError, FmuInstance
-from hdjoint.fmus import fmu_path
+from hdjoint.fmu.runner import FmuError, FmuInstance
+from hdjoint.fmu.shipped import fmu_path
 
 H = 1e-3
 NOISY_H = 0.0009999999999976694   # a step size a master computed as (t1 - t0) in floating point

@@ -9,10 +9,11 @@ import dataclasses
 import numpy as np
 import pytest
 
-from hdjoint import cli, parameters
-from hdjoint.cases import CASES, nominal_for, record
-from hdjoint.metrics import error_figures
-from hdjoint.recording import write_recording
+from hdjoint.app import cli
+from hdjoint.io import parameters
+from hdjoint.fmu.concealed_effects import CASES, nominal_for, record
+from hdjoint.estimation.metrics import error_figures
+from hdjoint.io.recording import write_recording
 
 
 @pytest.mark.slow

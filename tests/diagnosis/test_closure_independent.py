@@ -2,7 +2,7 @@
 set of a first diagnosis, used as the nominal set for another recording of
 the same joint with another excitation, comes out `consistent` there.
 
-On the independent truth (hdjoint.truth) the link's friction switches over
+On the independent truth (hdjoint_truth) the link's friction switches over
 0.01 rad/s of link speed and the motor's over 0.1-2 rad/s. While the model
 tied the link friction's smoothing to the motor's (omega_fc/N), the first
 recording's corrected set failed on every second recording (0 of 3 seeds,
@@ -17,9 +17,9 @@ into Kf, Cf and eq. (7): `kinematic_error` resized at bl1 = -2.6e-4 where
 the truth has 5.3e-5, and the second recording was `unexplained`)."""
 import pytest
 
-from hdjoint import parameters
-from hdjoint.diagnosis import diagnose
-from hdjoint.truth.cases import EFFECT_CASES, draw, record
+from hdjoint.io import parameters
+from hdjoint.diagnosis.pipeline import diagnose
+from hdjoint_truth.cases import EFFECT_CASES, draw, record
 
 pytestmark = pytest.mark.slow
 

@@ -1,4 +1,4 @@
-"""Controls of the independent truth (hdjoint.truth) that once raised false
+"""Controls of the independent truth (hdjoint_truth) that once raised false
 alarms, and the delay that must still be named (issue 10, items 3, 4, 7).
 
 The truth's controller holds each current over the sample that follows it
@@ -9,8 +9,8 @@ the motor channel), and on a multisine with a sharp Coulomb smoothing it
 named Stribeck friction at p ~ 1e-8, where the truth has none."""
 import pytest
 
-from hdjoint.diagnosis import diagnose
-from hdjoint.truth.cases import CONTROL_CASES, draw, record
+from hdjoint.diagnosis.pipeline import diagnose
+from hdjoint_truth.cases import CONTROL_CASES, draw, record
 
 pytestmark = pytest.mark.slow
 SECONDS = 20.0  # long enough for the false alarms to show (they did at 20 s, not at 10-15 s)

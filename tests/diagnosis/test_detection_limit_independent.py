@@ -7,8 +7,8 @@ have shown, and from what size it would. The limit must mean what it says:
 the same joint with the compliance twice the limit's size is named."""
 import pytest
 
-from hdjoint.truth.cases import EFFECT_CASES, draw, record
-from hdjoint.diagnosis import diagnose
+from hdjoint_truth.cases import EFFECT_CASES, draw, record
+from hdjoint.diagnosis.pipeline import diagnose
 
 pytestmark = pytest.mark.slow
 

@@ -11,10 +11,10 @@ import math
 
 import pytest
 
-from hdjoint.detection_limit import smallest_shown
-from hdjoint.diagnosis import diagnose
-from hdjoint.effects import EFFECTS
-from hdjoint.truth.cases import CONTROL_CASES, EFFECT_CASES, draw, record
+from hdjoint.diagnosis.detection_limit import smallest_shown
+from hdjoint.diagnosis.pipeline import diagnose
+from hdjoint.diagnosis.effects import EFFECTS
+from hdjoint_truth.cases import CONTROL_CASES, EFFECT_CASES, draw, record
 
 pytestmark = pytest.mark.slow
 

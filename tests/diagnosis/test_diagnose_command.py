@@ -7,11 +7,13 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
-from hdjoint import cli, parameters
-from hdjoint.cases import CASES, nominal_for, record
-from hdjoint.diagnosis import DiagnosisError, diagnose
-from hdjoint.fmu_runner import run_estimator_fmu
-from hdjoint.recording import write_recording
+from hdjoint.app import cli
+from hdjoint.io import parameters
+from hdjoint.fmu.concealed_effects import CASES, nominal_for, record
+from hdjoint.diagnosis.engine import DiagnosisError
+from hdjoint.diagnosis.pipeline import diagnose
+from hdjoint.fmu.runner import run_estimator_fmu
+from hdjoint.io.recording import write_recording
 
 pytestmark = pytest.mark.slow  # whole `hdjoint diagnose` runs
 
@@ -90,7 +92,7 @@ def test_a_malformed_validation_recording_is_refused_before_any_work(gravity_cas
 
 
 def test_corrected_parameters_run_in_the_estimator_fmu(gravity_case):
-    from hdjoint.recording import read_recording
+    from hdjoint.io.recording import read_recording
     rec = read_recording(gravity_case / "rec.csv")
     params = parameters.for_estimator(parameters.load(gravity_case / "out" / "params.json"))
     est = run_estimator_fmu(rec.time[:500], rec.i_m[:500], rec.theta_m[:500], rec.theta_l[:500], params)

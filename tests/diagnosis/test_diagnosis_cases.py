@@ -1,4 +1,4 @@
-"""The diagnosis on concealed effects (hdjoint.cases, 20 s recordings):
+"""The diagnosis on concealed effects (hdjoint.fmu.concealed_effects, 20 s recordings):
 controls stay consistent, and the effects it finds are found in the right
 part of the model with the fit improving on held-out data.
 
@@ -7,9 +7,9 @@ benchmarks/diagnosis_suite.py; its table, including the two effects it
 does not name (absorbed by a look-alike's calibration), is in the README."""
 import pytest
 
-from hdjoint.cases import CASES, Case, nominal_for, record
-from hdjoint.diagnosis import diagnose
-from hdjoint.effects import EFFECTS
+from hdjoint.fmu.concealed_effects import CASES, Case, nominal_for, record
+from hdjoint.diagnosis.pipeline import diagnose
+from hdjoint.diagnosis.effects import EFFECTS
 
 pytestmark = pytest.mark.slow  # a diagnosis of a 20-30 s recording per case
 
@@ -72,7 +72,7 @@ def test_torque_constant_warm_up_is_named_with_its_size():
     with a 15 s time constant), on a 20 s recording: named in the motor, its
     Kt_warmup interval holding the truth and excluding zero. (The law is the
     hypothesis's own: this checks the chain FMU -> recording -> fit, and the
-    pooled-gain test of a drift; hdjoint.truth checks an independent one.)"""
+    pooled-gain test of a drift; hdjoint_truth checks an independent one.)"""
     case = Case("thermal drift of Kt", ("thermal_drift",), truth={"Kt_warmup": -0.04, "Kt_warmup_tc": 15.0})
     doc = diagnose(record(case, DURATION), nominal_for(case))[1]
     assert doc["verdict"] == "missing_physics"

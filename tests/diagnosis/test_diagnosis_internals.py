@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from hdjoint.cases import CASES, nominal_for, record
-from hdjoint.diagnosis import Diagnosis
+from hdjoint.fmu.concealed_effects import CASES, nominal_for, record
+from hdjoint.diagnosis.engine import Diagnosis
 
 
 @pytest.fixture(scope="module")
@@ -32,8 +32,8 @@ def test_blocks_alternate_and_cover_the_run(diag):
 def test_estimates_depend_on_no_parameter_outside_their_cache_key(diag, part):
     """The evaluator reuses an estimate while the parameters in depends_on(part)
     are unchanged: no other parameter may change it, or the cache goes stale."""
-    from hdjoint import parameters
-    from hdjoint.channels import ESTIMATES, depends_on
+    from hdjoint.io import parameters
+    from hdjoint.diagnosis.part_torques import ESTIMATES, depends_on
     base = ESTIMATES[part](diag.prep, diag.nominal)
     for name, info in parameters.table().items():
         if name in depends_on(part):
@@ -47,8 +47,8 @@ def test_estimates_depend_on_no_parameter_outside_their_cache_key(diag, part):
 def test_every_effect_of_the_library_has_its_parameters_in_the_model():
     """The diagnosis skips an effect whose parameters the model lacks; in this
     build every effect must be testable, so a typo cannot drop one silently."""
-    from hdjoint import parameters
-    from hdjoint.effects import EFFECTS, KINEMATIC_EXTRA
+    from hdjoint.io import parameters
+    from hdjoint.diagnosis.effects import EFFECTS, KINEMATIC_EXTRA
     table = parameters.table()
     for effect in EFFECTS.values():
         for name in effect.params:
@@ -66,7 +66,7 @@ def test_the_transmission_estimate_does_not_lag_by_the_current_delay(diag):
     estimator's delay line did: a 2 ms delay put its lag into the transmission
     channel, and Kf, Cf and eq. (7) absorbed it). With the wave generator
     loaded by tau/N the current does not enter tau_T at all."""
-    from hdjoint.channels import tau_transmission
+    from hdjoint.diagnosis.part_torques import tau_transmission
     p = dict(diag.nominal, wg_load=1.0)
     np.testing.assert_array_equal(tau_transmission(diag.prep, dict(p, i_delay=2e-3)), tau_transmission(diag.prep, p))
     # With the motor current loading it, the current is the one realigned with the encoders.
@@ -79,7 +79,8 @@ def test_the_torsion_rate_is_reused_across_non_geometric_parameters_and_stays_ex
     """The damping's torsion rate depends on the geometry (N, eq. (7), its
     extra orders) alone: it is recomputed only when that changes, and the
     reused rate is the one the whole parameter set gives."""
-    from hdjoint import channels, parameters
+    from hdjoint.diagnosis import part_torques as channels
+    from hdjoint.io import parameters
     p = dict(diag.nominal, Df=4.0)
     first = channels.torsion_rate(diag.prep, p)
     moved = dict(p, Kf=0.8 * p["Kf"], Cf=2.0 * p.get("Cf", 0.0) + 1e-3, Kt=1.1 * p["Kt"], Kw=7.0, Cw=3.0)
@@ -100,8 +101,9 @@ def test_the_damping_torque_of_a_fast_torsion_ripple_leaves_no_transmission_resi
     57 Hz), and so must the sensor and the compliance torque it is compared
     with: before they did, 33 % of the damping torque stayed in the channel,
     periodic in the motor angle, where the kinematic error's order 6 took it."""
-    from hdjoint import _core, parameters
-    from hdjoint.recording import Recording
+    from hdjoint import _core
+    from hdjoint.io import parameters
+    from hdjoint.io.recording import Recording
     p = dict(parameters.defaults(), a0=0.0, al1=0.0, bl1=0.0, aw1=0.0, bw1=0.0, aw2=0.0, bw2=0.0, Kw=1e9,
              Df=5.0)
     t = np.arange(0.0, 4.0, 1e-3)

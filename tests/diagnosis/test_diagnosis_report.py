@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from matplotlib.image import imread
 
-from hdjoint import cli
-from hdjoint.cases import CASES, nominal_for, record
-from hdjoint.parameters import save
-from hdjoint.recording import write_recording
+from hdjoint.app import cli
+from hdjoint.fmu.concealed_effects import CASES, nominal_for, record
+from hdjoint.io.parameters import save
+from hdjoint.io.recording import write_recording
 
 pytestmark = pytest.mark.slow  # a diagnosis to report on, and Chromium
 

@@ -1,4 +1,4 @@
-"""The diagnosis's evidence on short recordings (hdjoint.cases): the
+"""The diagnosis's evidence on short recordings (hdjoint.fmu.concealed_effects): the
 false-alarm rate on controls of other seeds and excitations, a kinematic
 error the nominal model has but mis-sized ("resized"), and closure: the
 corrected set, fitted jointly on two recordings, is consistent on a third
@@ -8,10 +8,11 @@ import json
 
 import pytest
 
-from hdjoint import cli, parameters
-from hdjoint.cases import CASES, nominal_for, record
-from hdjoint.diagnosis import diagnose
-from hdjoint.recording import write_recording
+from hdjoint.app import cli
+from hdjoint.io import parameters
+from hdjoint.fmu.concealed_effects import CASES, nominal_for, record
+from hdjoint.diagnosis.pipeline import diagnose
+from hdjoint.io.recording import write_recording
 
 CONTROL = next(c for c in CASES if not c.present)
 
@@ -40,7 +41,7 @@ def test_a_kinematic_error_ten_times_its_nominal_size_is_resized():
     assert [f["effect"] for f in resized] == ["kinematic_error"]
     moved = resized[0]["parameters"]
     assert "aw1" in moved
-    truth = 6e-5 * 0.92  # hdjoint.cases.PARAMETER_ERRORS
+    truth = 6e-5 * 0.92  # hdjoint.fmu.concealed_effects.PARAMETER_ERRORS
     assert moved["aw1"]["nominal"] == 6e-6 and moved["aw1"]["lo"] < truth * 1.3 and moved["aw1"]["hi"] > truth * 0.7
     assert resized[0]["p_value"] < 0.05
     assert doc["calibration"]["aw1"]["identified"] and abs(doc["calibration"]["aw1"]["z"]) > 3

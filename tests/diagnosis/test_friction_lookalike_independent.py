@@ -9,8 +9,8 @@ the fit is degenerate (effects.py, `_rise_inside_the_switch`) and the
 recording says what it cannot tell."""
 import pytest
 
-from hdjoint.diagnosis import diagnose
-from hdjoint.truth.cases import CONTROL_CASES, draw, record
+from hdjoint.diagnosis.pipeline import diagnose
+from hdjoint_truth.cases import CONTROL_CASES, draw, record
 
 pytestmark = pytest.mark.slow
 
@@ -30,7 +30,7 @@ def test_a_real_stribeck_rise_is_still_named_on_a_multisine():
     # The truth's rise (Fs ~ 0.01 N.m over ~8 rad/s) lies far outside the
     # Coulomb switch; the multisine never holds a slow speed, so it is named
     # in the look-alike set with the excitation that would separate the two.
-    from hdjoint.truth.cases import EFFECT_CASES
+    from hdjoint_truth.cases import EFFECT_CASES
     joint = draw(next(c for c in EFFECT_CASES if c.name == "stribeck friction"), 1)
     assert joint.setups[0].excitation == "multisine" and joint.truth["omega_s"] > 1.0
     _, doc = diagnose(record(joint, 0), joint.nominal)

@@ -14,9 +14,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hdjoint.channels import Prepared, hysteresis_torque, tau_transmission
-from hdjoint.signals import kinematics
-from hdjoint.truth.cases import EFFECT_CASES, draw, record
+from hdjoint.diagnosis.part_torques import Prepared, hysteresis_torque, tau_transmission
+from hdjoint.diagnosis.kinematics import kinematics
+from hdjoint_truth.cases import EFFECT_CASES, draw, record
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 from effect_detectability import ORACLE  # noqa: E402  (the truth's loop in the model's parameters)

@@ -83,7 +83,7 @@ def test_rows_are_grouped_by_the_engine_that_diagnosed_them():
 
 def test_a_ripple_named_at_orders_the_truth_lacks_is_counted_apart(tmp_path):
     """Seed 0's kinematic error has link order 2 and motor order 4 beyond eq. (7)
-    (hdjoint.truth.cases); a finding at link order 5 names the effect, not its orders."""
+    (hdjoint_truth.cases); a finding at link order 5 names the effect, not its orders."""
     case = "kinematic error (extra orders)"
     at = lambda *orders: {"effect": "kinematic_error", "orders": [list(o) for o in orders]}  # noqa: E731
     rows = [row(case, ["kinematic_error"], run("missing_physics", at(("theta_l", 5.0))), seed=0),

@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hdjoint.cases import CASES, nominal_for, record, truth_for
-from hdjoint.diagnosis import diagnose
-from hdjoint.validation import validate
+from hdjoint.fmu.concealed_effects import CASES, nominal_for, record, truth_for
+from hdjoint.diagnosis.pipeline import diagnose
+from hdjoint.diagnosis.validation import validate
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 import lara8_table  # noqa: E402  (the LARA8 conventions: tooth ratio, current sign, nominal set)
@@ -81,8 +81,8 @@ def test_the_two_lobe_error_a_nominal_set_lacks_is_added_from_the_encoders_torsi
     nuisance spans the current alignment's interval ([-2, 0] ms here): with
     the motor estimate at one alignment inside it, the evidence hung on it
     (z 5.1 at -0.3 ms, 2.9 at -2.0 ms; Diagnosis.torsion_torque)."""
-    from hdjoint.jobs import diagnose_to_directory
-    from hdjoint.recording import write_recording
+    from hdjoint.jobs.diagnose import diagnose_to_directory
+    from hdjoint.io.recording import write_recording
     write_recording(tmp_path / "joint2.csv", lara8_table.read_joint(DATA / "joint2_jog_joint_mass.csv"))
     example = Path(__file__).resolve().parents[2] / "examples/lara8/joint12_params.json"
     doc = diagnose_to_directory(str(tmp_path / "joint2.csv"), str(example), str(tmp_path / "out"))
@@ -129,8 +129,8 @@ def test_a_ripple_over_few_revolutions_stands_out_of_its_off_orders():
     sinc(d R) of a ripple at order k: on LARA8 joint1_jog (2.6 revolutions)
     the quarter-order off-orders sat inside the order's own lobe, so a pure
     ripple read as broadband (prominence about 1, 3 needed)."""
-    from hdjoint.signals import folds
-    from hdjoint.structure import order_search
+    from hdjoint.diagnosis.kinematics import folds
+    from hdjoint.diagnosis.structure import order_search
     n = 1250
     theta_m = np.linspace(0.0, 2.6 * 2 * np.pi, n)
     residual = np.cos(3.0 * theta_m + 0.3) + 0.3 * np.random.default_rng(0).standard_normal(n)
@@ -209,9 +209,9 @@ def test_a_recording_where_the_motor_stands_still_gets_its_report(tmp_path):
     motor channels compare nothing, and the report's regime figure took the
     percentiles of no samples and failed (lara8_table.py stopped there).
     The diagnosis must finish with its report and say what it cannot test."""
-    from hdjoint import parameters
-    from hdjoint.jobs import diagnose_to_directory
-    from hdjoint.recording import write_recording
+    from hdjoint.io import parameters
+    from hdjoint.jobs.diagnose import diagnose_to_directory
+    from hdjoint.io.recording import write_recording
     rec = lara8_table.read_joint(DATA / "joint3_jog_linear_mass.csv")
     first, _ = lara8_table.halves(rec)
     write_recording(tmp_path / "still.csv", first)

@@ -4,9 +4,9 @@ same as with a null made anew, and that null is not made twice."""
 import numpy as np
 import pytest
 
-from hdjoint.detection_limit import detection_limits
-from hdjoint.diagnosis import diagnose
-from hdjoint.truth.cases import CONTROL_CASES, draw, record
+from hdjoint.diagnosis.detection_limit import detection_limits
+from hdjoint.diagnosis.pipeline import diagnose
+from hdjoint_truth.cases import CONTROL_CASES, draw, record
 
 pytestmark = pytest.mark.slow
 

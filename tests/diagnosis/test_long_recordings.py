@@ -4,10 +4,13 @@ across the jump to the next), and are the diagnosis' folds."""
 import numpy as np
 import pytest
 
-from hdjoint import diagnosis, parameters
-from hdjoint.cases import CASES, nominal_for, record
-from hdjoint.channels import Prepared, tau_transmission
-from hdjoint.signals import kinematics, sample_windows, window_labels
+from hdjoint.diagnosis import engine
+from hdjoint.diagnosis.pipeline import diagnose
+from hdjoint.diagnosis.rules import FOLDS
+from hdjoint.io import parameters
+from hdjoint.fmu.concealed_effects import CASES, nominal_for, record
+from hdjoint.diagnosis.part_torques import Prepared, tau_transmission
+from hdjoint.diagnosis.kinematics import kinematics, sample_windows, window_labels
 
 pytestmark = pytest.mark.slow  # a long recording diagnosed in windows
 
@@ -48,12 +51,12 @@ def test_each_window_is_filtered_and_simulated_on_its_own(long_rec):
 
 def test_a_long_recording_is_diagnosed_in_windows(long_rec, monkeypatch):
     case, rec = long_rec
-    monkeypatch.setattr(diagnosis, "ANALYSED_SECONDS", 8.0)
-    result, doc = diagnosis.diagnose(rec, nominal_for(case))
+    monkeypatch.setattr(engine, "ANALYSED_SECONDS", 8.0)
+    result, doc = diagnose(rec, nominal_for(case))
     diag = result.engine
     assert len(diag.rec) < 0.4 * len(rec)
     assert doc["recording"]["samples"] == len(rec) and doc["recording"]["analysed_samples"] == len(diag.rec)
     # The windows are the folds: each one wholly fitted or wholly held out.
-    assert set(np.unique(diag.fold)) == set(range(diagnosis.FOLDS))
+    assert set(np.unique(diag.fold)) == set(range(FOLDS))
     assert doc["verdict"] == "missing_physics" and doc["findings"][0]["effect"] == "gravity_load"
     assert doc["params"]["mgl"] == pytest.approx(5.0, rel=0.1)

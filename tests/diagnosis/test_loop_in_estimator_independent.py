@@ -8,9 +8,9 @@ summary carries the caveat where the FMU loses
 (docs/diagnosis_measurements.md, "The fitted loop in the estimator FMU")."""
 import pytest
 
-from hdjoint.diagnosis import diagnose
-from hdjoint.report import build
-from hdjoint.truth.cases import EFFECT_CASES, draw, record
+from hdjoint.diagnosis.pipeline import diagnose
+from hdjoint.diagnosis.report import build
+from hdjoint_truth.cases import EFFECT_CASES, draw, record
 
 pytestmark = pytest.mark.slow
 

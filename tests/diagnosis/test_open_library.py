@@ -3,12 +3,12 @@
 positive held-out gain, and proposes nothing on a joint that matches its model."""
 import pytest
 
-from hdjoint import parameters
-from hdjoint.current_alignment import align_current
-from hdjoint.diagnosis import Diagnosis
-from hdjoint.open_library import propose_terms
-from hdjoint.truth.physics import Form
-from hdjoint.truth.simulate import Setup, simulate
+from hdjoint.io import parameters
+from hdjoint.diagnosis.current_alignment import align_current
+from hdjoint.diagnosis.engine import Diagnosis
+from hdjoint.diagnosis.open_library import propose_terms
+from hdjoint_truth.physics import Form
+from hdjoint_truth.simulate import Setup, simulate
 
 NOMINAL = dict(parameters.defaults(), wg_load=1.0)
 EVERY_CHANNEL = [{"channel": name} for name in ("transmission", "motor", "link")]

@@ -14,11 +14,11 @@ import pytest
 
 from dataclasses import replace
 
-from hdjoint.effects import EFFECTS
-from hdjoint.jobs import diagnose_to_directory
-from hdjoint import parameters
-from hdjoint.recording import write_recording
-from hdjoint.truth.cases import EFFECT_CASES, draw, record
+from hdjoint.diagnosis.effects import EFFECTS
+from hdjoint.jobs.diagnose import diagnose_to_directory
+from hdjoint.io import parameters
+from hdjoint.io.recording import write_recording
+from hdjoint_truth.cases import EFFECT_CASES, draw, record
 
 pytestmark = pytest.mark.slow
 

@@ -8,9 +8,9 @@ it is named first; on the 40 controls this gave the same single false
 alarm as before (docs/diagnosis_measurements.md, "Reversals judged pooled")."""
 import pytest
 
-from hdjoint.diagnosis import diagnose
-from hdjoint.effects import EFFECTS
-from hdjoint.truth.cases import EFFECT_CASES, draw, record
+from hdjoint.diagnosis.pipeline import diagnose
+from hdjoint.diagnosis.effects import EFFECTS
+from hdjoint_truth.cases import EFFECT_CASES, draw, record
 
 pytestmark = pytest.mark.slow
 

@@ -7,9 +7,9 @@ and cogging's own test accepts it."""
 import pytest
 from threadpoolctl import threadpool_limits
 
-from hdjoint.diagnosis import Diagnosis
-from hdjoint.effects import EFFECTS
-from hdjoint.truth.cases import EFFECT_CASES, draw, record
+from hdjoint.diagnosis.engine import Diagnosis
+from hdjoint.diagnosis.effects import EFFECTS
+from hdjoint_truth.cases import EFFECT_CASES, draw, record
 
 pytestmark = pytest.mark.slow
 

@@ -4,12 +4,12 @@ the motor channel does not compare it."""
 import numpy as np
 import pytest
 
-from hdjoint.diagnosis import Diagnosis
-from hdjoint.motor_rest import motor_at_rest
-from hdjoint.recording import Recording
-from hdjoint.signals import kinematics
-from hdjoint.truth.cases import CONTROL_CASES, draw, record
-from hdjoint.truth.excitations import multisine, paper, sweep
+from hdjoint.diagnosis.engine import Diagnosis
+from hdjoint.diagnosis.motor_rest import motor_at_rest
+from hdjoint.io.recording import Recording
+from hdjoint.diagnosis.kinematics import kinematics
+from hdjoint_truth.cases import CONTROL_CASES, draw, record
+from hdjoint_truth.excitations import multisine, paper, sweep
 
 N = 100.0
 COUNT = 2 * np.pi / 4096  # the motor encoder's step
@@ -68,8 +68,8 @@ def test_cogging_is_tested_and_accepted_on_the_sweep_with_dwells():
     sweep): 7 of 20 held-out folds rest. Counted as folds, they made the z of
     every motor-angle order 0, and the diagnosis said `thermal_drift`
     (docs/diagnosis_measurements.md, "Blind folds")."""
-    from hdjoint.effects import EFFECTS
-    from hdjoint.truth.cases import EFFECT_CASES
+    from hdjoint.diagnosis.effects import EFFECTS
+    from hdjoint_truth.cases import EFFECT_CASES
     joint = draw(next(c for c in EFFECT_CASES if c.name == "cogging"), 2)
     assert joint.setups[0].excitation == "sweep" and joint.truth["cog_order"] == 6.0
     diag = Diagnosis(record(joint, 0), joint.nominal, workers=1)

@@ -1,4 +1,4 @@
-"""Torsion-side effects on the independent truth (hdjoint.truth; issue 10,
+"""Torsion-side effects on the independent truth (hdjoint_truth; issue 10,
 items 2, 3, 4, 7): the transmission channel no longer hides them behind the
 flexspline's structural damping, and the hysteresis hypothesis follows the
 torsion the encoders can resolve (docs/diagnosis_measurements.md, "Torsion-side effects").
@@ -10,8 +10,8 @@ this joint is `consistent`: the hypothesis, driven by raw encoder increments
 that flip its loop with every count, explains 3.9 % held out at z = 2.8."""
 import pytest
 
-from hdjoint.diagnosis import diagnose
-from hdjoint.truth.cases import EFFECT_CASES, draw, record
+from hdjoint.diagnosis.pipeline import diagnose
+from hdjoint_truth.cases import EFFECT_CASES, draw, record
 
 pytestmark = pytest.mark.slow
 

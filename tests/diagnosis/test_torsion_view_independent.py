@@ -15,9 +15,9 @@ from dataclasses import replace
 import pytest
 from threadpoolctl import threadpool_limits
 
-from hdjoint.diagnosis import TORSION_VIEW, Diagnosis
-from hdjoint.effects import EFFECTS
-from hdjoint.truth.cases import EFFECT_CASES, draw, record
+from hdjoint.diagnosis.engine import TORSION_VIEW, Diagnosis
+from hdjoint.diagnosis.effects import EFFECTS
+from hdjoint_truth.cases import EFFECT_CASES, draw, record
 
 pytestmark = pytest.mark.slow
 

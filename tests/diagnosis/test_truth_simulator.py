@@ -8,12 +8,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import hdjoint.truth as truth_package
-from hdjoint.truth import physics
-from hdjoint.truth.cases import CONTROL_CASES, EFFECT_CASES, draw
-from hdjoint.truth.physics import Form
-from hdjoint.truth.sensors import CurrentSensor, Encoder
-from hdjoint.truth.simulate import Setup, _Plant, check_form, simulate
+import hdjoint_truth as truth_package
+from hdjoint_truth import physics
+from hdjoint_truth.cases import CONTROL_CASES, EFFECT_CASES, draw
+from hdjoint_truth.physics import Form
+from hdjoint_truth.sensors import CurrentSensor, Encoder
+from hdjoint_truth.simulate import Setup, _Plant, check_form, simulate
 
 NOMINAL = dict(N=100.0, Kt=0.045, Jm=2.09e-5, Bm=3e-5, Fc=0.015, Kf=1e4, Cf=0.0645, Kw=10.0, Cw=10.0, a0=1e-4,
                al1=1e-4, bl1=0.5e-4, omega_l=1.0, aw1=0.6e-4, bw1=-0.4e-4, aw2=0.2e-4, bw2=0.1e-4, omega_w=2.0,
@@ -149,7 +149,7 @@ def test_forms_that_cannot_run_are_refused_by_name():
 
 
 def test_cases_cover_every_effect_and_every_excitation_and_draw_differently_per_seed():
-    from hdjoint.effects import EFFECTS
+    from hdjoint.diagnosis.effects import EFFECTS
     present = {e for c in EFFECT_CASES for e in c.present}
     assert present == set(EFFECTS) - {"wave_generator_load"}
     assert {c.excitation for c in CONTROL_CASES} == {"paper", "multisine", "sweep", "constant_speeds", "chirp"}

@@ -10,8 +10,8 @@ import math
 
 import pytest
 
-from hdjoint.diagnosis import diagnose
-from hdjoint.truth.cases import EFFECT_CASES, draw, record
+from hdjoint.diagnosis.pipeline import diagnose
+from hdjoint_truth.cases import EFFECT_CASES, draw, record
 
 pytestmark = pytest.mark.slow
 

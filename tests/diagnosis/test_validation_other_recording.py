@@ -6,11 +6,11 @@ from pathlib import Path
 
 import numpy as np
 
-from hdjoint.channels import Prepared
-from hdjoint.diagnosis import Evaluator, channels_for, place_offset
-from hdjoint.signals import kinematics
-from hdjoint.truth.cases import CONTROL_CASES, draw, record
-from hdjoint.validation import summary_line, validate
+from hdjoint.diagnosis.part_torques import Prepared
+from hdjoint.diagnosis.engine import Evaluator, channels_for, place_offset
+from hdjoint.diagnosis.kinematics import kinematics
+from hdjoint_truth.cases import CONTROL_CASES, draw, record
+from hdjoint.diagnosis.validation import summary_line, validate
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 import lara8_table  # noqa: E402  (the LARA8 conventions: tooth ratio, current sign, nominal set)

@@ -12,10 +12,10 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from hdjoint import effects
-from hdjoint.diagnosis import Diagnosis
-from hdjoint.effects import EFFECTS, FREQUENCY_FOLLOWS_TIME, frequency_time_correlation
-from hdjoint.truth.cases import CONTROL_CASES, draw, record
+from hdjoint.diagnosis import effects
+from hdjoint.diagnosis.engine import Diagnosis
+from hdjoint.diagnosis.effects import EFFECTS, FREQUENCY_FOLLOWS_TIME, frequency_time_correlation
+from hdjoint_truth.cases import CONTROL_CASES, draw, record
 
 pytestmark = pytest.mark.slow  # each draws and simulates the truth's recordings
 

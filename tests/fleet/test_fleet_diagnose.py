@@ -11,9 +11,9 @@ import pyarrow.parquet as pq
 import pytest
 from matplotlib.image import imread
 
-from hdjoint import cli
+from hdjoint.app import cli
 from hdjoint.fleet.generate import JOINT_PATTERN, Drift, generate
-from hdjoint.jobs import diagnose_to_directory
+from hdjoint.jobs.diagnose import diagnose_to_directory
 
 pytestmark = pytest.mark.slow  # diagnoses: several seconds each
 

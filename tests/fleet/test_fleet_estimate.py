@@ -13,11 +13,13 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
-from hdjoint import cli, experiments, parameters
+from hdjoint.app import cli
+from hdjoint.fmu import experiments
+from hdjoint.io import parameters
 from hdjoint.fleet import store
 from hdjoint.fleet.run import run_fleet
-from hdjoint.metrics import error_figures
-from hdjoint.recording import read_recording, write_recording
+from hdjoint.estimation.metrics import error_figures
+from hdjoint.io.recording import read_recording, write_recording
 
 DURATION = 3.0
 
@@ -81,7 +83,7 @@ def test_a_rerun_reuses_every_finished_result(fleet, two_workers, tmp_path):
 def test_a_killed_run_restarts_where_it_stopped(fleet, two_workers, tmp_path):
     out = tmp_path / "out"
     rows_dir = out / store.ROWS
-    command = [sys.executable, "-m", "hdjoint.cli", "fleet", "estimate", str(fleet / "logs/**/*.csv"),
+    command = [sys.executable, "-m", "hdjoint.app.cli", "fleet", "estimate", str(fleet / "logs/**/*.csv"),
                str(fleet / "long/*.csv"), "--params-map", str(fleet / "map.json"), "--out", str(out),
                "--workers", "1", "--quiet"]
     run = subprocess.Popen(command, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)

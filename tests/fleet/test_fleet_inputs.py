@@ -7,7 +7,7 @@ import pytest
 
 from hdjoint.fleet import rows, trend
 from hdjoint.fleet.inputs import glob_to_regex, plan
-from hdjoint.jobs import UserError
+from hdjoint.jobs.inputs import UserError
 
 
 @pytest.mark.parametrize("pattern, path, hit", [
@@ -135,7 +135,7 @@ def test_a_significant_but_tiny_trend_is_not_a_drift():
 
 
 def test_the_command_line_names_bad_input_in_one_line(tree, capsys):
-    from hdjoint import cli
+    from hdjoint.app import cli
     (tree / "map.json").write_text(json.dumps({"logs/r1/j1/*.csv": "p/j1.json"}))
     code = cli.main(["fleet", "estimate", str(tree / "logs/**/*.csv"), "--params-map", str(tree / "map.json"),
                      "--out", str(tree / "out")])

@@ -1,4 +1,4 @@
-"""The diagnosis's motor and link torque channels (hdjoint.channels) are the
+"""The diagnosis's motor and link torque channels (hdjoint.diagnosis.part_torques) are the
 joint's own physics: run on the joint's true motion, with every effect of the
 motor and link equations on, they give the joint's transmitted torque.
 
@@ -10,9 +10,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hdjoint import _core, channels, parameters
-from hdjoint.recording import Recording
-from hdjoint.signals import Kinematics
+from hdjoint import _core
+from hdjoint.diagnosis import part_torques as channels
+from hdjoint.io import parameters
+from hdjoint.io.recording import Recording
+from hdjoint.diagnosis.kinematics import Kinematics
 
 DT = 1e-4
 EFFECTS = {  # every effect of the motor and link equations (LuGre and warm-up replace the drift law: off)

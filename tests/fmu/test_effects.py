@@ -9,9 +9,10 @@ import numpy as np
 import pytest
 from fmpy import read_model_description
 
-from hdjoint import _core, parameters
-from hdjoint.fmu_runner import FmuError, FmuInstance
-from hdjoint.fmus import fmu_path
+from hdjoint import _core
+from hdjoint.io import parameters
+from hdjoint.fmu.runner import FmuError, FmuInstance
+from hdjoint.fmu.shipped import fmu_path
 
 TS = 1e-3
 
@@ -247,7 +248,7 @@ def test_fmu_state_restores_and_serialises_exactly_with_effects_on(fmu):
 
 
 def test_estimator_fmu_equals_the_batch_path_with_effects_on():
-    from hdjoint.fmu_runner import run_estimator_fmu
+    from hdjoint.fmu.runner import run_estimator_fmu
     t, i_m, _, sim = _recording_with_effects(800)
     p = parameters.for_estimator(EFFECTS)
     fmu = run_estimator_fmu(t, i_m, sim["theta_m"], sim["theta_l"], p)

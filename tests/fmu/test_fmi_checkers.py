@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 from fmpy.validation import validate_fmu
 
-from hdjoint.fmus import FMU_NAMES, fmu_path
+from hdjoint.fmu.shipped import FMU_NAMES, fmu_path
 
 pytestmark = pytest.mark.slow  # VDMCheck2's JVM on each FMU
 

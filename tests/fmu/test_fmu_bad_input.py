@@ -14,8 +14,8 @@ import pytest
 import scipy.optimize
 from fmpy.fmi1 import FMICallException
 
-from hdjoint import parameters
-from hdjoint.fmu_runner import FmuError, FmuInstance, run_estimator_fmu
+from hdjoint.io import parameters
+from hdjoint.fmu.runner import FmuError, FmuInstance, run_estimator_fmu
 
 from conftest import (ESTIMATOR, ESTIMATOR_INPUTS, ESTIMATOR_OUTPUTS, FMU_NAMES, JOINT, JOINT_INPUTS,
                       JOINT_OUTPUTS, Slave, joint_test_inputs)
@@ -533,8 +533,8 @@ def test_fmu_instance_messages_stay_with_their_instance(estimator_fmu, joint_fmu
 
 SURVIVOR = textwrap.dedent(r"""
     import gc, math
-    from hdjoint.fmu_runner import FmuError, FmuInstance
-    from hdjoint.fmus import fmu_path
+    from hdjoint.fmu.runner import FmuError, FmuInstance
+    from hdjoint.fmu.shipped import fmu_path
     first = FmuInstance(fmu_path("JointTorqueEstimator"), "first")
     first.start(0.0)
     second = FmuInstance(fmu_path("HarmonicDriveJoint"), "second")

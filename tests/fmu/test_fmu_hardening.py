@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 
-from hdjoint.fmus import fmu_path
+from hdjoint.fmu.shipped import fmu_path
 
 from conftest import ALL_FMUS, CONTROLLER, ESTIMATOR, FMU_IO, JOINT
 
@@ -62,8 +62,8 @@ def serialized(s) -> bytes:
 # Run in a child with a timeout: before the bound, these steps never returned.
 _HUGE_STEPS = textwrap.dedent("""
     import sys
-    from hdjoint.fmu_runner import FmuError, FmuInstance
-    from hdjoint.fmus import fmu_path
+    from hdjoint.fmu.runner import FmuError, FmuInstance
+    from hdjoint.fmu.shipped import fmu_path
     name, params, h = sys.argv[1], eval(sys.argv[2]), float(sys.argv[3])
     with FmuInstance(fmu_path(name), "huge") as inst:
         inst.start(0.0, None, params, {})

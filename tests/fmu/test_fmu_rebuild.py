@@ -15,7 +15,7 @@ import pytest
 from fmpy.build import build_platform_binary
 from fmpy.validation import validate_fmu
 
-from hdjoint.fmu_runner import run_estimator_fmu
+from hdjoint.fmu.runner import run_estimator_fmu
 
 from conftest import ESTIMATOR, ESTIMATOR_INPUTS, ESTIMATOR_OUTPUTS, Slave
 

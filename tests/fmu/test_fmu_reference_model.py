@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hdjoint import _core, parameters
-from hdjoint.fmu_runner import run_estimator_fmu
+from hdjoint import _core
+from hdjoint.io import parameters
+from hdjoint.fmu.runner import run_estimator_fmu
 
 from reference_model import compliance, paper_ukf
 

@@ -7,7 +7,8 @@ import ctypes
 import numpy as np
 import pytest
 
-from hdjoint import _core, parameters
+from hdjoint import _core
+from hdjoint.io import parameters
 
 from conftest import (ESTIMATOR, ESTIMATOR_INPUTS, ESTIMATOR_OUTPUTS, FMU_NAMES, JOINT, JOINT_INPUTS,
                       JOINT_OUTPUTS, joint_test_inputs)

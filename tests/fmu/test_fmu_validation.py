@@ -11,8 +11,8 @@ import fmpy
 import pytest
 from fmpy.validation import validate_fmu
 
-from hdjoint import parameters
-from hdjoint.fmus import fmu_path
+from hdjoint.io import parameters
+from hdjoint.fmu.shipped import fmu_path
 
 from conftest import ESTIMATOR, FMU_NAMES, JOINT
 

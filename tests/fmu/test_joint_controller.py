@@ -9,8 +9,8 @@ import math
 import numpy as np
 import pytest
 
-from hdjoint.fmu_runner import FmuError, FmuInstance
-from hdjoint.fmus import fmu_path
+from hdjoint.fmu.runner import FmuError, FmuInstance
+from hdjoint.fmu.shipped import fmu_path
 
 INPUTS = ("theta_m", "theta_l", "tau_fb")
 OUTPUTS = ("i_m", "tau_ext", "theta_ref", "tau_d", "e_link")

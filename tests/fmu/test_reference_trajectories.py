@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from fmpy import simulate_fmu
 
-from hdjoint import parameters
-from hdjoint.fmus import fmu_path
+from hdjoint.io import parameters
+from hdjoint.fmu.shipped import fmu_path
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 TWO_PI = 2 * np.pi

@@ -13,7 +13,7 @@ import time
 import pytest
 
 from fmi_fuzzer import FMU_NAMES, Campaign, summarise
-from hdjoint.fmus import fmu_path
+from hdjoint.fmu.shipped import fmu_path
 
 SEQUENCES_PER_FMU = 80
 TIMEOUT = 1.5  # s of CPU time: a normal sequence takes ~50 ms

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from fmi_fuzzer import FMU_NAMES, Campaign
-from hdjoint.fmus import fmu_path
+from hdjoint.fmu.shipped import fmu_path
 
 pytestmark = pytest.mark.slow  # the hang reproducers wait out their budget
 START = [["instantiate"], ["setup", 0.0, None], ["enter"], ["exit"]]

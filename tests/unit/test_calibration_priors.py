@@ -5,11 +5,11 @@ import json
 import numpy as np
 import pytest
 
-from hdjoint import parameters
-from hdjoint.calibration import Calibrated, Prior, priors
-from hdjoint.effects import EFFECTS, calibrated_parameters
-from hdjoint.significance import NullNoise, benjamini_hochberg, null_z
-from hdjoint.signals import folds
+from hdjoint.io import parameters
+from hdjoint.diagnosis.calibration import Calibrated, Prior, priors
+from hdjoint.diagnosis.effects import EFFECTS, calibrated_parameters
+from hdjoint.diagnosis.significance import NullNoise, benjamini_hochberg, null_z
+from hdjoint.diagnosis.kinematics import folds
 
 
 def test_the_table_carries_cited_tolerances():
@@ -93,8 +93,8 @@ def test_the_simulated_null_of_a_structureless_regressor_is_centred_below_signif
 
 def test_a_binned_structure_is_significant_against_the_simulated_null_and_noise_is_not():
     """The unexplained-structure scans' test (findings.remaining_structure): bins as regressors."""
-    from hdjoint.significance import p_value
-    from hdjoint.structure import bins_of, held_out_gain
+    from hdjoint.diagnosis.significance import p_value
+    from hdjoint.diagnosis.structure import bins_of, held_out_gain
     rng = np.random.default_rng(8)
     n = 8000
     fold = folds(n, 40)
@@ -114,7 +114,7 @@ def test_a_binned_structure_is_significant_against_the_simulated_null_and_noise_
 
 
 def test_the_vectorised_null_statistic_is_the_held_out_gain_z_of_each_replicate():
-    from hdjoint.structure import held_out_gain_sq
+    from hdjoint.diagnosis.structure import held_out_gain_sq
     rng = np.random.default_rng(1)
     n = 6000
     fold = folds(n, 40)

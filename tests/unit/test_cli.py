@@ -13,11 +13,12 @@ import subprocess
 import numpy as np
 import pytest
 
-from hdjoint import _core, parameters
-from hdjoint.cli import main
-from hdjoint.fmu_runner import run_estimator_fmu
-from hdjoint.fmus import FMU_NAMES, fmu_path
-from hdjoint.recording import read_recording
+from hdjoint import _core
+from hdjoint.io import parameters
+from hdjoint.app.cli import main
+from hdjoint.fmu.runner import run_estimator_fmu
+from hdjoint.fmu.shipped import FMU_NAMES, fmu_path
+from hdjoint.io.recording import read_recording
 
 from cli_helpers import assert_one_line_error, files_in, read_csv, rec_csv, rewrite, run_cli, simulated  # noqa: F401 (fixtures)
 

@@ -9,8 +9,9 @@ import os
 import numpy as np
 import pytest
 
-from hdjoint import _core, parameters
-from hdjoint.recording import iter_recording, read_recording, write_recording
+from hdjoint import _core
+from hdjoint.io import parameters
+from hdjoint.io.recording import iter_recording, read_recording, write_recording
 
 from cli_helpers import assert_one_line_error, files_in, read_csv, rec_csv, run_cli, simulated  # noqa: F401 (fixtures)
 
@@ -242,7 +243,7 @@ def test_the_reader_streams_a_block_before_reading_the_rest(rec_csv):
 
 def test_blocks_join_to_the_whole_recording(simulated, tmp_path, capsys, monkeypatch):
     """Tiny blocks (7 rows) give the same estimates as one block."""
-    from hdjoint import recording
+    from hdjoint.io import recording
     whole = tmp_path / "whole.csv"
     assert run_cli(capsys, "estimate", simulated, "-o", whole)[0] == 0
     monkeypatch.setattr(recording, "CHUNK_ROWS", 7)
@@ -254,7 +255,7 @@ def test_blocks_join_to_the_whole_recording(simulated, tmp_path, capsys, monkeyp
 
 
 def test_an_fmu_error_names_the_failed_call_once():
-    from hdjoint.fmu_runner import FmuError, run_estimator_fmu
+    from hdjoint.fmu.runner import FmuError, run_estimator_fmu
     with pytest.raises(FmuError) as caught:
         run_estimator_fmu(np.arange(3) * 1e-3, np.zeros(3), np.zeros(3), np.zeros(3), {"Ts": 1000.0})
     assert str(caught.value).count("fmi2SetReal") == 1, str(caught.value)
@@ -263,7 +264,7 @@ def test_an_fmu_error_names_the_failed_call_once():
 
 def test_a_gap_between_two_blocks_is_found_and_split_alike(rec_csv, tmp_path, capsys, monkeypatch):
     """The gap is the step into the second block (rows 0-999, then 1000-...)."""
-    from hdjoint import recording
+    from hdjoint.io import recording
     with_gap(rec_csv)
     whole = tmp_path / "whole.csv"
     assert run_cli(capsys, "estimate", rec_csv, "--split-gaps", "-o", whole)[0] == 0

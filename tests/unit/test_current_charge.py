@@ -7,9 +7,9 @@ control (docs/diagnosis_measurements.md)."""
 import numpy as np
 import pytest
 
-from hdjoint.channels import Prepared, _smoothed_current
-from hdjoint.recording import Recording
-from hdjoint.signals import kinematics
+from hdjoint.diagnosis.part_torques import Prepared, _smoothed_current
+from hdjoint.io.recording import Recording
+from hdjoint.diagnosis.kinematics import kinematics
 
 TS, SUBSTEP = 1e-3, 1.25e-4
 

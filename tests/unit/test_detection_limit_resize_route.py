@@ -5,9 +5,9 @@ closes that route, and the effect then gets no limit (detection_limit._moved).
 Which effects get a limit at all: detection_limit.untold_effects."""
 from types import SimpleNamespace
 
-from hdjoint.calibration import Prior
-from hdjoint.detection_limit import _moved, resized
-from hdjoint.effects import EFFECTS
+from hdjoint.diagnosis.calibration import Prior
+from hdjoint.diagnosis.detection_limit import _moved, resized
+from hdjoint.diagnosis.effects import EFFECTS
 
 KINEMATIC = EFFECTS["kinematic_error"]
 DIAG = SimpleNamespace(priors={"al1": Prior(1e-4, 1e-4), "Kf": Prior(1e4, 1e3)}, calibrated_names=["al1", "Kf"])
@@ -27,7 +27,7 @@ def test_only_the_effects_own_terms_count_and_a_term_already_beyond_closes_the_r
 
 
 def test_which_effects_get_a_limit():
-    from hdjoint.detection_limit import untold_effects
+    from hdjoint.diagnosis.detection_limit import untold_effects
     effects = [EFFECTS[e] for e in ("kinematic_error", "backlash", "time_delay", "cogging", "hysteresis")]
     diag = SimpleNamespace(**vars(DIAG), last_round=[], last_candidates=effects)
     within = {"al1": 1e-4, "ke_l1_a": 0.0, "ke_l1_b": 0.0}

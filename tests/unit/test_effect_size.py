@@ -1,8 +1,8 @@
-"""The truth's effect size factor (hdjoint.truth.cases.draw(size=)): the
+"""The truth's effect size factor (hdjoint_truth.cases.draw(size=)): the
 benchmark's joints at size 1, the effect alone scaled otherwise."""
 import pytest
 
-from hdjoint.truth.cases import EFFECT_CASES, draw
+from hdjoint_truth.cases import EFFECT_CASES, draw
 
 
 def _case(effect):

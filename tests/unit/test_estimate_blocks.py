@@ -7,9 +7,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hdjoint import _core, parameters
-from hdjoint.estimate_job import Options, estimate_to_file
-from hdjoint.recording import read_recording, write_recording
+from hdjoint import _core
+from hdjoint.io import parameters
+from hdjoint.jobs.estimate import Options, estimate_to_file
+from hdjoint.io.recording import read_recording, write_recording
 
 from cli_helpers import rec_csv, simulated  # noqa: F401 (fixtures)
 

@@ -2,7 +2,7 @@
 the channel search and the torsion view."""
 from types import SimpleNamespace
 
-from hdjoint.effects import EFFECTS, fill_slots
+from hdjoint.diagnosis.effects import EFFECTS, fill_slots
 
 
 def _order(angle, k):

@@ -4,7 +4,7 @@ import multiprocessing
 import os
 import threading
 
-from hdjoint import forked
+from hdjoint.diagnosis import forked
 
 
 def _pid_and_square(i):

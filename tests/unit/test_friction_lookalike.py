@@ -3,8 +3,8 @@
 the speed is held in its range, not by gain where the speed passes through zero."""
 import numpy as np
 
-from hdjoint.friction_lookalike import HELD_FOR, held_speed, steady_evidence
-from hdjoint.signals import Kinematics
+from hdjoint.diagnosis.friction_lookalike import HELD_FOR, held_speed, steady_evidence
+from hdjoint.diagnosis.kinematics import Kinematics
 
 STEP = 1e-3
 TIME = np.arange(0.0, 20.0, STEP)
@@ -59,15 +59,15 @@ def test_too_few_held_folds_cannot_separate():
 
 def _peak_over_fc(fitted: dict) -> float:
     """The fitted law's largest friction over speed (the C++ law), in units of Fc."""
-    from hdjoint import parameters
-    from hdjoint.channels import motor_friction
+    from hdjoint.io import parameters
+    from hdjoint.diagnosis.part_torques import motor_friction
     p = dict(parameters.defaults(), Bm=0.0, **fitted)
     speed = np.geomspace(1e-4, 50.0, 4000)
     return float(np.max(motor_friction(p, speed, 0.0 * speed)) / p["Fc"])
 
 
 def test_a_rise_inside_the_coulomb_switch_is_no_stribeck_rise():
-    from hdjoint.effects import EFFECTS
+    from hdjoint.diagnosis.effects import EFFECTS
     degenerate = EFFECTS["stribeck_friction"].degenerate
     # The fit on the independent truth's tanh joint (smoothing 0.115 rad/s, no
     # Stribeck): twice Fc, but inside the switch, so the law never exceeds Fc.

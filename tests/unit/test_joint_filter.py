@@ -8,9 +8,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hdjoint import _core, experiments, parameters
-from hdjoint.fmu_runner import run_estimator_fmu
-from hdjoint.metrics import error_figures
+from hdjoint import _core
+from hdjoint.fmu import experiments
+from hdjoint.io import parameters
+from hdjoint.fmu.runner import run_estimator_fmu
+from hdjoint.estimation.metrics import error_figures
 
 from reference_joint_filter import joint_filter, rts_smoother
 
@@ -145,8 +147,8 @@ def test_estimate_skips_one_outlier_current_visibly(short_recording, tmp_path, c
     # Issue 12: one sample of i_m = 1e6 A froze tau_hat (RMS error 261 N.m, exit 0, no message).
     import dataclasses
 
-    from hdjoint import cli
-    from hdjoint.recording import write_recording
+    from hdjoint.app import cli
+    from hdjoint.io.recording import write_recording
     r = short_recording
     i_m = r.i_m.copy()
     i_m[300] = 1e6

@@ -3,10 +3,10 @@ fold, is reported as one ambiguous finding with both and the excitation
 that would separate them; a clearly better one is added alone."""
 import numpy as np
 
-from hdjoint.diagnosis import Hypothesis, _finding_for
-from hdjoint.effects import EFFECTS
-from hdjoint.findings import separate_by
-from hdjoint.structure import HeldOutGain
+from hdjoint.diagnosis.engine import Hypothesis, _finding_for
+from hdjoint.diagnosis.effects import EFFECTS
+from hdjoint.diagnosis.findings import separate_by
+from hdjoint.diagnosis.structure import HeldOutGain
 
 
 def _hypothesis(effect_id, fold_gains, p_value=1e-4):

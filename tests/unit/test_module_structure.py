@@ -1,34 +1,122 @@
-"""The package's modules depend on each other one way: the command line and
-the demo share jobs.py, and neither imports the other, not even lazily
-inside a function."""
+"""The package is layered, and imports run one way: from the application down
+to the C++ core. Every import is read, including those inside functions, so
+a circle cannot hide behind a lazy import."""
 import ast
-import importlib
-import inspect
+from pathlib import Path
+
+import hdjoint
+
+PACKAGE = Path(hdjoint.__file__).resolve().parent
+# Bottom to top. A module may import its own layer and the layers below it.
+LAYERS = ("hdjoint._core", "hdjoint.io", "hdjoint.fmu", "hdjoint.estimation", "hdjoint.diagnosis",
+          "hdjoint.jobs", "hdjoint.fleet", "hdjoint.app")
+# Helpers of the tests and benchmarks, never shipped.
+NOT_SHIPPED = ("truth", "tuning")
 
 
-def _imported_modules(module: str) -> set[str]:
-    tree = ast.parse(inspect.getsource(importlib.import_module(module)))
+def _module_name(path: Path) -> str:
+    parts = list(path.relative_to(PACKAGE.parent).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _modules() -> dict[str, Path]:
+    return {_module_name(p): p for p in PACKAGE.rglob("*.py")}
+
+
+def _resolve(name: str, known: dict[str, Path]) -> str:
+    """The module NAME refers to: itself, or its package when NAME is a
+    function or class imported from a module."""
+    while name not in known and "." in name:
+        name = name.rsplit(".", 1)[0]
+    return name
+
+
+def imports_of(module: str, path: Path, known: dict[str, Path]) -> set[str]:
+    """Every hdjoint module MODULE imports, anywhere in its file."""
+    is_package = path.name == "__init__.py"
     found = set()
-    for node in ast.walk(tree):
-        if isinstance(node, ast.ImportFrom):
-            found.add(("." * node.level) + (node.module or ""))
-        elif isinstance(node, ast.Import):
-            found.update(alias.name for alias in node.names)
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parts = module.split(".") if is_package else module.split(".")[:-1]
+                parts = parts[: len(parts) - node.level + 1]
+                base = ".".join(parts + ([node.module] if node.module else []))
+            names = [f"{base}.{a.name}" for a in node.names] if base else []
+        else:
+            continue
+        for name in names:
+            if name == "hdjoint" or name.startswith("hdjoint."):
+                target = "hdjoint._core" if name.startswith("hdjoint._core") else _resolve(name, known)
+                if target not in ("hdjoint", module):
+                    found.add(target)
     return found
 
 
-def test_demo_does_not_import_the_command_line():
-    assert not {".cli", "hdjoint.cli"} & _imported_modules("hdjoint.demo")
+def _layer(module: str) -> int:
+    return max(i for i, prefix in enumerate(LAYERS) if module == prefix or module.startswith(prefix + "."))
 
 
-def test_command_line_does_not_import_the_demo():
-    assert not {".demo", "hdjoint.demo"} & _imported_modules("hdjoint.cli")
+def _graph() -> dict[str, set[str]]:
+    known = _modules()
+    return {m: imports_of(m, p, known) for m, p in known.items() if m != "hdjoint"}
+
+
+def test_every_module_sits_in_a_layer():
+    for module in _graph():
+        assert any(module == p or module.startswith(p + ".") for p in LAYERS), f"{module} is in no layer"
+
+
+def test_no_import_reaches_up_a_layer():
+    upward = [f"{m} imports {t}" for m, targets in _graph().items() for t in targets if _layer(t) > _layer(m)]
+    assert not upward, "\n".join(upward)
+
+
+def test_no_import_circles():
+    graph = _graph()
+    state: dict[str, int] = {}
+    circles = []
+
+    def visit(node, trail):
+        state[node] = 1
+        for nxt in sorted(graph.get(node, ())):
+            if state.get(nxt) == 1:
+                circles.append(" -> ".join(trail[trail.index(nxt):] + [nxt]))
+            elif nxt not in state:
+                visit(nxt, trail + [nxt])
+        state[node] = 2
+
+    for module in sorted(graph):
+        if module not in state:
+            visit(module, [module])
+    assert not circles, "\n".join(circles)
+
+
+def test_the_demo_does_not_import_the_command_line():
+    assert "hdjoint.app.cli" not in _graph()["hdjoint.app.demo"]
+
+
+def test_test_helpers_are_not_shipped():
+    shipped = {p.stem for p in PACKAGE.rglob("*.py")} | {p.name for p in PACKAGE.rglob("*") if p.is_dir()}
+    assert not shipped & set(NOT_SHIPPED)
+
+
+def test_the_checker_sees_an_import_inside_a_function(tmp_path):
+    """The test itself: a lazy import back up a layer is found."""
+    source = tmp_path / "hdjoint" / "io" / "sneaky.py"
+    source.parent.mkdir(parents=True)
+    source.write_text("def f():\n    from hdjoint.diagnosis.engine import diagnose\n    from ..app import cli\n")
+    known = {"hdjoint.io.sneaky": source, "hdjoint.diagnosis.engine": source, "hdjoint.app.cli": source}
+    found = imports_of("hdjoint.io.sneaky", source, known)
+    assert found == {"hdjoint.diagnosis.engine", "hdjoint.app.cli"}
+    assert all(_layer(t) > _layer("hdjoint.io.sneaky") for t in found)
 
 
 def test_one_conftest_for_the_whole_suite():
     # Test modules import shared names with `from conftest import ...`; a
     # second conftest.py in a subfolder would shadow the root one for the
     # whole session and break those imports whenever both are collected.
-    from pathlib import Path
     tests = Path(__file__).resolve().parents[1]
     assert [p.relative_to(tests).as_posix() for p in tests.rglob("conftest.py")] == ["conftest.py"]

@@ -5,8 +5,8 @@ structure of the effect's own shape lets a tiny planting gain through the
 cross term alone; its own share tells that apart."""
 import numpy as np
 
-from hdjoint.detection_limit import planted_gains
-from hdjoint.diagnosis import MIN_GAIN
+from hdjoint.diagnosis.detection_limit import planted_gains
+from hdjoint.diagnosis.rules import MIN_GAIN
 
 RNG = np.random.default_rng(5)
 N = 20000
@@ -40,9 +40,9 @@ class _StubPlanting:
 
     def __new__(cls, base):
         from types import SimpleNamespace
-        from hdjoint.detection_limit import _Planting, reference_set
-        from hdjoint.effects import EFFECTS
-        from hdjoint.parameters import defaults
+        from hdjoint.diagnosis.detection_limit import _Planting, reference_set
+        from hdjoint.diagnosis.effects import EFFECTS
+        from hdjoint.io.parameters import defaults
         planting = object.__new__(_Planting)
         effect = EFFECTS["stribeck_friction"]  # stationary: judged by the fold z against the null
         reference = reference_set(effect, defaults())

@@ -1,4 +1,4 @@
-"""Tests for hdjoint.recording (the contract's recording CSV format)."""
+"""Tests for hdjoint.io.recording (the contract's recording CSV format)."""
 
 import os
 import pickle
@@ -6,9 +6,8 @@ import pickle
 import numpy as np
 import pytest
 
-from hdjoint import recording
-from hdjoint.recording import (Recording, RecordingError, read_recording,
-                               write_csv, write_recording)
+from hdjoint.io import recording
+from hdjoint.io.recording import Recording, RecordingError, read_recording, write_csv, write_recording
 
 HEADER = "time,i_m,theta_m,theta_l,tau_sensor\n"
 

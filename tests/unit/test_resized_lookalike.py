@@ -8,10 +8,10 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from hdjoint.calibration import Calibrated, Prior
-from hdjoint.diagnosis import Diagnosis, Finding, Hypothesis
-from hdjoint.effects import EFFECTS
-from hdjoint.structure import HeldOutGain
+from hdjoint.diagnosis.calibration import Calibrated, Prior
+from hdjoint.diagnosis.engine import Diagnosis, Finding, Hypothesis
+from hdjoint.diagnosis.effects import EFFECTS
+from hdjoint.diagnosis.structure import HeldOutGain
 
 
 def _gain(g, z=2.0):

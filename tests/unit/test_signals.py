@@ -4,8 +4,8 @@ motion holds between smoothed signals exactly as between true ones."""
 import numpy as np
 import pytest
 
-from hdjoint.recording import Recording
-from hdjoint.signals import gaussian_kernels, kinematics
+from hdjoint.io.recording import Recording
+from hdjoint.diagnosis.kinematics import gaussian_kernels, kinematics
 
 
 @pytest.mark.parametrize("sigma", [2.5, 6.0, 11.3])

@@ -7,10 +7,12 @@ run afresh, without running it again. (Running it for every move of a0 was
 import numpy as np
 import pytest
 
-from hdjoint import _core, channels, parameters
-from hdjoint.channels import Prepared
-from hdjoint.recording import Recording
-from hdjoint.signals import kinematics
+from hdjoint import _core
+from hdjoint.diagnosis import part_torques as channels
+from hdjoint.io import parameters
+from hdjoint.diagnosis.part_torques import Prepared
+from hdjoint.io.recording import Recording
+from hdjoint.diagnosis.kinematics import kinematics
 
 TS = 1e-3
 

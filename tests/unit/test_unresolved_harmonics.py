@@ -5,9 +5,9 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from hdjoint import parameters
-from hdjoint.diagnosis import unresolved_harmonics
-from hdjoint.structure import candidate_orders, resolves
+from hdjoint.io import parameters
+from hdjoint.diagnosis.engine import unresolved_harmonics
+from hdjoint.diagnosis.structure import candidate_orders, resolves
 
 
 def _rec(motor_travel, link_travel):

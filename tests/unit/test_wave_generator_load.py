@@ -2,7 +2,8 @@
 (as in the joint FMU) instead of the motor current (the paper's approximation)."""
 import numpy as np
 
-from hdjoint import _core, parameters
+from hdjoint import _core
+from hdjoint.io import parameters
 
 
 def _exact_joint_run():

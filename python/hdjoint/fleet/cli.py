@@ -27,8 +27,8 @@ def _common(p) -> None:
 
 
 def cmd_fleet(args) -> int:
-    from ..jobs import UserError
-    from .run import ALLOWED_FAILURES, run_fleet
+    from hdjoint.jobs.inputs import UserError
+    from hdjoint.fleet.run import ALLOWED_FAILURES, run_fleet
     if args.workers is not None and args.workers < 1:
         raise UserError(f"--workers must be at least 1, not {args.workers}")
     options = {"engine": args.engine} if args.fleet_command == "estimate" else {}
@@ -38,7 +38,7 @@ def cmd_fleet(args) -> int:
                         allowed_failures=ALLOWED_FAILURES if args.allowed_failures is None else args.allowed_failures)
     print(f"{len(summary.rows)} recordings: {summary.computed} processed now, {summary.cached} done earlier, "
           f"{summary.failed} failed; wrote {summary.parquet} and {summary.html}")
-    from .trend import rank_joints
+    from hdjoint.fleet.trend import rank_joints
     for d in rank_joints(summary.rows)[:5]:
         if d.drifting:
             print(f"  drifting: {d.joint}: {d.effect} {d.direction} ({d.strongest.quantity} "
@@ -47,7 +47,7 @@ def cmd_fleet(args) -> int:
 
 
 def cmd_generate(args) -> int:
-    from .generate import JOINT_PATTERN, generate
+    from hdjoint.fleet.generate import JOINT_PATTERN, generate
     path = generate(args.out, joints=args.joints, days=args.days, duration=args.duration,
                     progress=lambda m: print(f"[generate] {m}", file=sys.stderr, flush=True))
     print(f"wrote {args.joints} joints x {args.days} days under {args.out}; params map {path}")

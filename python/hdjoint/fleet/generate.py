@@ -1,6 +1,6 @@
 """A simulated fleet with known drifts, for the proof and the docs: joints
 of one robot recorded once a day on the paper experiment, each joint a few
-percent off its nominal set (hdjoint.cases), and some joints with a
+percent off its nominal set (hdjoint.fmu.concealed_effects), and some joints with a
 parameter growing linearly over the days."""
 from __future__ import annotations
 
@@ -9,9 +9,10 @@ from dataclasses import dataclass
 from datetime import date, timedelta
 from pathlib import Path
 
-from .. import cases, experiments, parameters
-from ..effects import KINEMATIC_EQ7
-from ..recording import write_recording
+from hdjoint.fmu import concealed_effects as cases, experiments
+from hdjoint.io import parameters
+from hdjoint.diagnosis.effects import KINEMATIC_EQ7
+from hdjoint.io.recording import write_recording
 
 
 @dataclass(frozen=True)

@@ -19,7 +19,7 @@ from dataclasses import dataclass, replace
 from datetime import datetime, timezone
 from pathlib import Path
 
-from ..jobs import UserError
+from hdjoint.jobs.inputs import UserError
 
 
 @dataclass(frozen=True)

@@ -14,8 +14,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from ..plots import to_data_uri  # noqa: E402
-from . import store, trend  # noqa: E402
+from hdjoint.io.figures import to_data_uri  # noqa: E402
+from hdjoint.fleet import store, trend  # noqa: E402
 
 STYLE = ("body{font-family:sans-serif;max-width:1100px;margin:auto;padding:1em}"
          "table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #bbb;padding:2px 6px;"

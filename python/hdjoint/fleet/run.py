@@ -12,8 +12,8 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from . import rows, store, tasks
-from .inputs import Job, plan
+from hdjoint.fleet import rows, store, tasks
+from hdjoint.fleet.inputs import Job, plan
 
 # How often the scheduler may lose a worker while it runs one recording
 # before that recording is marked failed (Dask's allowed-failures).
@@ -162,7 +162,7 @@ def run_fleet(command: str, patterns: list[str], out: str | os.PathLike, params_
     summary.failed = sum(r.get("status") != "ok" for r in summary.rows)
     summary.parquet = write_parquet(out, summary.rows)
     if write_report:
-        from .report import write_report as write_html
+        from hdjoint.fleet.report import write_report as write_html
         summary.html = write_html(out, summary.rows)
     return summary
 

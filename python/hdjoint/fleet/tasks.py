@@ -10,9 +10,9 @@ import time
 import traceback
 from pathlib import Path
 
-from ..jobs import UserError
-from . import rows, store
-from .inputs import Job
+from hdjoint.jobs.inputs import UserError
+from hdjoint.fleet import rows, store
+from hdjoint.fleet.inputs import Job
 
 COMMANDS = ("diagnose", "estimate")
 ESTIMATES = ("tau_compliance", "tau_ukf", "tau_hat")  # compared with tau_sensor when there is one
@@ -27,9 +27,9 @@ def output_dir(out: str, job: Job) -> Path:
 
 def _estimator_params(job: Job, rec) -> dict:
     """The estimator's parameter set; Ts from the recording unless the file sets it."""
-    from .. import parameters
-    from ..jobs import read_params
-    from ..timebase import given_ts, sample_period
+    from hdjoint.io import parameters
+    from hdjoint.jobs.inputs import read_params
+    from hdjoint.io.timebase import given_ts, sample_period
     params = read_params(job.params)
     params["Ts"] = sample_period(rec.median_step, given_ts(job.params))
     return parameters.for_estimator(params)
@@ -37,16 +37,16 @@ def _estimator_params(job: Job, rec) -> dict:
 
 def estimate(job: Job, out: Path, engine: str) -> dict:
     """Torque estimates into out/estimates.csv; error figures against the sensor."""
-    from ..jobs import read_recording
-    from ..metrics import error_figures
-    from ..recording import write_csv
+    from hdjoint.jobs.inputs import read_recording
+    from hdjoint.estimation.metrics import error_figures
+    from hdjoint.io.recording import write_csv
     rec = read_recording(job.recording)
     params = _estimator_params(job, rec)
     if engine == "fmu":
-        from ..fmu_runner import run_estimator_fmu
+        from hdjoint.fmu.runner import run_estimator_fmu
         est = run_estimator_fmu(rec.time, rec.i_m, rec.theta_m, rec.theta_l, params)
     else:
-        from .. import _core
+        from hdjoint import _core
         est = _core.run_estimator(params, rec.time, rec.i_m, rec.theta_m, rec.theta_l)
     out.mkdir(parents=True, exist_ok=True)
     write_csv(out / "estimates.csv", {"time": rec.time, **{k: est[k] for k in ESTIMATES}})
@@ -59,7 +59,7 @@ def estimate(job: Job, out: Path, engine: str) -> dict:
 
 
 def diagnose(job: Job, out: Path) -> dict:
-    from ..jobs import diagnose_to_directory
+    from hdjoint.jobs.diagnose import diagnose_to_directory
     return rows.diagnosis_row(diagnose_to_directory(job.recording, job.params, out))
 
 

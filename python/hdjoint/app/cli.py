@@ -1,0 +1,148 @@
+"""The `hdjoint` command line. Exit code 0 on success; otherwise a one-line
+reason on stderr and a non-zero code: 2 for usage and input errors (bad
+arguments, unreadable or malformed files, a time base or output location
+that would go wrong), 1 for a failure while running. docs/robustness.md.
+Heavy modules are imported inside the subcommands, so `hdjoint --help` is quick."""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from hdjoint.jobs.inputs import UserError, check_output_file, read_params as _params
+from hdjoint.io.timebase import TIME_UNITS
+
+
+def cmd_fmus(args) -> int:
+    from hdjoint.fmu.shipped import export_fmus
+    for path in export_fmus(args.out):
+        print(path)
+    return 0
+
+
+def cmd_simulate(args) -> int:
+    from hdjoint.fmu import experiments
+    from hdjoint.io.recording import write_recording
+    check_output_file(args.output, inputs=(args.params, args.joint))  # before any work
+    nominal = _params(args.params)
+    joint = _params(args.joint) if args.joint else experiments.true_joint_parameters(nominal)
+    rec = experiments.run(args.experiment, joint=joint, nominal=nominal, duration=args.duration,
+                          sensors=experiments.Sensors(seed=args.seed))
+    write_recording(args.output, rec)
+    print(f"{args.output}: {len(rec)} samples, {rec.duration:.3f} s ({args.experiment})")
+    return 0
+
+
+def cmd_estimate(args) -> int:
+    from hdjoint.jobs.estimate import Options, estimate_to_file
+    figures = estimate_to_file(Options(
+        recording=args.recording, output=args.output, params=args.params, engine=args.engine, smooth=args.smooth,
+        time_unit=args.time_unit, split_gaps=args.split_gaps, allow_jitter=args.allow_jitter))
+    if figures:
+        print(f"{'estimate':<16} {'RMS error':>10} {'max error':>10}   (N.m, against tau_sensor)")
+        for name, fig in figures.items():
+            print(f"{name:<16} {fig.rms:>10.4f} {fig.max:>10.4f}")
+    return 0
+
+
+def cmd_diagnose(args) -> int:
+    from hdjoint.jobs.diagnose import diagnose_to_directory
+    doc = diagnose_to_directory(args.recording, args.params, args.out, args.validate, args.time_unit)
+    from hdjoint.diagnosis.validation import summary_line
+    print(f"verdict: {doc['verdict']}")
+    for f in doc["findings"]:
+        fit = f["fit"]
+        print(f"  {f['effect']:<28} {f['where']['part']:<13} confidence {f['confidence']:.2f}  held-out RMS "
+              f"{fit['holdout_rms_before']:.4f} -> {fit['holdout_rms_after']:.4f} N.m")
+    for u in doc["unexplained"]:
+        print(f"  unexplained: {u['channel']} residual depends on {u['feature']} (largest at {u['largest_at']})")
+    for v in doc.get("validation", []):
+        print(f"  validation: {summary_line(v)}")
+    print(f"wrote {args.out}/findings.json, params.json, params.ssv, report.html ({doc['seconds']} s)")
+    return 0
+
+
+def cmd_demo(args) -> int:
+    from pathlib import Path
+
+    from hdjoint.app.demo import run_demo
+    run_demo(Path(args.out))
+    return 0
+
+
+def _time_unit_argument(p) -> None:
+    p.add_argument("--time-unit", choices=tuple(TIME_UNITS),
+                   help="unit of the recording's time column (default: seconds, refused when implausible)")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="hdjoint", description=__doc__.splitlines()[0])
+    sub = ap.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("fmus", help="write every FMU the project builds into a directory")
+    p.add_argument("--out", required=True, help="target directory")
+    p.set_defaults(run=cmd_fmus)
+
+    p = sub.add_parser("simulate", help="run the joint FMU on a built-in experiment, write a recording")
+    p.add_argument("--experiment", default="paper", help="built-in experiment (default: paper)")
+    p.add_argument("--params", help="nominal parameter set (JSON) the controller assumes")
+    p.add_argument("--joint", help="parameter set (JSON) of the simulated joint "
+                                   "(default: the nominal set with realistic deviations)")
+    p.add_argument("--duration", type=float, help="seconds (default: the experiment's)")
+    p.add_argument("--seed", type=int, default=1, help="seed of the sensor noise")
+    p.add_argument("-o", "--output", required=True, help="recording to write (CSV)")
+    p.set_defaults(run=cmd_simulate)
+
+    p = sub.add_parser("estimate", help="torque estimates on a recording")
+    p.add_argument("recording")
+    p.add_argument("--params", help="parameter set (JSON)")
+    p.add_argument("--engine", choices=("fmu", "batch"), default="fmu",
+                   help="run JointTorqueEstimator.fmu through fmpy (default) or the native batch path")
+    p.add_argument("--smooth", action="store_true",
+                   help="add tau_smooth: the RTS smoother over the joint-state filter (offline; always computed "
+                        "by the native batch path, also with --engine fmu)")
+    p.add_argument("-o", "--output", required=True, help="estimates to write (CSV); never the recording itself")
+    _time_unit_argument(p)
+    p.add_argument("--split-gaps", action="store_true",
+                   help="at a gap (a step over 10 median steps) restart the estimator instead of refusing the "
+                        "recording; each gap is named in a warning")
+    p.add_argument("--allow-jitter", action="store_true",
+                   help="accept steps more than 20 %% off the median step (the estimator still samples every Ts)")
+    p.set_defaults(run=cmd_estimate)
+
+    p = sub.add_parser("diagnose", help="locate and name what the model leaves out of a recording")
+    p.add_argument("recording", nargs="+",
+                   help="one recording, or several of the same joint (their shared parameters are fitted jointly)")
+    p.add_argument("--params", help="the nominal parameter set (JSON; an optional \"tolerance\" object "
+                                    "states relative tolerances, e.g. {\"Kt\": 0.1})")
+    p.add_argument("--out", required=True, help="directory for findings.json, params.json, params.ssv, report.html")
+    p.add_argument("--validate", nargs="+", default=[], metavar="RECORDING",
+                   help="other recordings of the same joint: the corrected model is checked on them (never fitted)")
+    _time_unit_argument(p)
+    p.set_defaults(run=cmd_diagnose)
+
+    p = sub.add_parser("demo", help="the main job on built-in data: FMUs, estimation, paper table, report")
+    p.add_argument("--out", default="hdjoint-demo", help="output directory (default: hdjoint-demo)")
+    p.set_defaults(run=cmd_demo)
+
+    from hdjoint.fleet.cli import register as register_fleet
+    register_fleet(sub)
+    return ap
+
+
+def main(argv=None) -> int:
+    try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as e:  # argparse: --help (0) or a usage error (2), already printed
+        return e.code
+    try:
+        return args.run(args)
+    except UserError as e:
+        print(f"hdjoint {args.command}: {e}", file=sys.stderr)
+        return 2
+    except (OSError, RuntimeError, ValueError) as e:
+        print(f"hdjoint {args.command}: {e}", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

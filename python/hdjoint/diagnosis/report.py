@@ -1,0 +1,286 @@
+"""The diagnosis report: one self-contained HTML page (figures embedded as
+PNG data URIs) that shows where the mismatch is, what was left out, the
+model added and the fit before and after."""
+from __future__ import annotations
+
+import html
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from hdjoint.diagnosis import plots as dp  # noqa: E402
+from hdjoint.io.parameters import unit_in_text, values_in_text  # noqa: E402
+from hdjoint.io.figures import to_data_uri  # noqa: E402
+from hdjoint.diagnosis.structure import candidate_orders  # noqa: E402
+
+VERDICT_TEXT = {
+    "missing_physics": "Physics is missing from the nominal model: the findings below name it, model it and "
+                       "show the fit improve on held-out data.",
+    "consistent": "Nothing is missing: after calibration the residuals hold no structure that predicts held-out "
+                  "data; what remains is noise and quantisation.",
+    "unexplained": "Structure remains that no hypothesis of the library explains; where it is is listed below.",
+}
+
+
+def _figure(draw, size=(9, 3.2)) -> str:
+    fig, ax = plt.subplots(figsize=size, constrained_layout=True)
+    draw(ax)
+    return to_data_uri(fig)
+
+
+def _img(uri: str, alt: str) -> str:
+    return f'<figure><img src="{uri}" alt="{html.escape(alt)}"><figcaption>{html.escape(alt)}</figcaption></figure>'
+
+
+def _table(rows, header) -> str:
+    head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
+    body = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in r) + "</tr>" for r in rows)
+    return f"<table><tr>{head}</tr>{body}</table>"
+
+
+def _fmt(x) -> str:
+    return f"{x:.4g}" if isinstance(x, (int, float)) else str(x)
+
+
+def _where_text(w: dict) -> str:
+    """A finding's location in words (never a raw dict)."""
+    regime = w["regime"] if isinstance(w["regime"], str) else ", ".join(
+        f"{name} ({ratio}x its share of time)" for name, ratio in w["regime"].items())
+    text = (f"the {w['part']} ({w['channel']} channel), {100 * w['fraction_of_time']:.0f} % of the time; "
+            f"concentrated: {regime}")
+    if w.get("time_segments"):
+        text += "; strongest at " + ", ".join(f"{a:g}-{b:g} s" for a, b in w["time_segments"][:3])
+    if w.get("angle"):
+        text += "; at " + ", ".join(f"order {o['order']:g} of {o['angle']}" + (f" ({o['note']})" if "note" in o else "")
+                                    for o in w["angle"])
+    return text
+
+
+def _interval_text(v: dict) -> str:
+    return (f"{_fmt(v['estimate'])} [{_fmt(v['lo'])}, {_fmt(v['hi'])}] "
+            f"(nominal {_fmt(v['nominal'])} ± {_fmt(v['tolerance'])})")
+
+
+def _one_of(f: dict) -> str:
+    """A look-alike set's members with their shares of the evidence."""
+    return " or ".join(f"{html.escape(a['effect'])} ({100 * a['evidence_share']:.0f} % of the evidence)"
+                       for a in f["alternatives"])
+
+
+def _finding_line(f: dict) -> str:
+    head = f"<b>{html.escape(f['kind'])}</b>: {html.escape(f['effect'])} (p = {f['p_value']:.2g})"
+    if f.get("resized"):
+        moved = "; ".join(f"{html.escape(n)} {html.escape(_interval_text(v))}" for n, v in f["parameters"].items())
+        if f["kind"] == "ambiguous":
+            return f"{head}: one of {_one_of(f)}; modelled as {html.escape(f['effect'])} resized: {moved}"
+        return f"{head}: {moved}"
+    intervals = f.get("intervals", {})
+    values = "; ".join(
+        f"{html.escape(n)} = {_fmt(v)}" + (f" [{_fmt(intervals[n][0])}, {_fmt(intervals[n][1])}]"
+                                          if intervals.get(n) else "")
+        for n, v in f["parameters"].items())
+    caveat = f.get("in_the_estimator", {}).get("caveat")
+    values += f". <i>Caveat: {html.escape(caveat)}</i>" if caveat else ""
+    if f["kind"] == "ambiguous":
+        return f"{head}: one of {_one_of(f)}; modelled as {html.escape(f['effect'])}: {values}"
+    return f"{head}: {values}"
+
+
+def _summary(doc: dict) -> str:
+    """The box a reader sees first: verdict, findings, moved parameters, what remains, what to record next."""
+    items = [f"<p class='verdict'><b>Verdict: {html.escape(doc['verdict'].replace('_', ' '))}.</b> "
+             f"{html.escape(VERDICT_TEXT[doc['verdict']])}</p>"]
+    if doc["findings"]:
+        items.append("<ul>" + "".join(f"<li>{_finding_line(f)}</li>" for f in doc["findings"]) + "</ul>")
+    moved = [n for n in doc.get("beyond_tolerance", [])]
+    items.append("<p><b>Parameters beyond their tolerance:</b> " + (html.escape(", ".join(
+        f"{n} {_interval_text(doc['calibration'][n])}" for n in moved)) if moved else "none") + ".</p>")
+    items.append("<p><b>Unexplained:</b> " + (html.escape("; ".join(
+        f"{u['channel']} channel against {u['feature']} (held-out gain {u['held_out_gain']:.3g})"
+        for u in doc["unexplained"])) if doc["unexplained"] else "nothing") + ".</p>")
+    if doc.get("cannot_tell"):
+        items.append("<p><b>This recording cannot tell:</b> " + html.escape("; ".join(
+            f"{x.get('effect') or x['parameter']}: {x['why']}" for x in doc["cannot_tell"])) + ".</p>")
+    advice = [f["separate_by"] for f in doc["findings"] if f.get("separate_by")]
+    # An effect a look-alike set already names has its excitation in that set's sentence.
+    in_a_set = {a["effect"] for f in doc["findings"] for a in f.get("alternatives") or []}
+    advice += [f"To settle {x['effect']}, record {x['record']}." for x in doc.get("cannot_tell", [])
+               if x.get("effect") and x["record"] and x["effect"] not in in_a_set]
+    advice += [f"To test {n['effect']}, record a motion that removes this: {n['reason']}." for n in doc["not_testable"]]
+    items.append("<p><b>What to record next:</b> " + (html.escape(" ".join(advice)) if advice
+                                                      else "nothing needed to settle these findings") + "</p>")
+    return "<section id='summary' class='summary'>" + "".join(items) + "</section>"
+
+
+def _recording_text(doc: dict) -> str:
+    recordings = doc.get("recordings") or [doc["recording"]]
+    parts = [f"{r['path'] or 'recording'} ({r['samples']} samples, {r['duration']:.1f} s)" for r in recordings]
+    sensor = "with" if doc["recording"]["torque_sensor"] else "without"
+    return (f"Recording{'s fitted jointly' if len(parts) > 1 else ''}: {'; '.join(parts)}, {sensor} a torque sensor; "
+            f"{doc['recording']['analysed_samples']} samples analysed" + _alignment_text(doc["recording"]))
+
+
+def _alignment_text(recording: dict) -> str:
+    a = recording.get("current_alignment")
+    if not a:
+        return ""
+    return (f"; the current acting at each encoder sample is the one logged {-a['estimate'] * 1e3:.2f} ms before it "
+            f"(95 % interval {-a['hi'] * 1e3:.2f} to {-a['lo'] * 1e3:.2f} ms; "
+            f"{-a['bounds'][0] * 1e3:.2f} ms is a current held over each sample)")
+
+
+def _validation_section(entries: list[dict]) -> str:
+    rows = []
+    for v in entries:
+        for channel, row in v["channels"].items():
+            rows.append((v["path"], channel, _fmt(row["nominal"]["rms"]), _fmt(row["calibrated"]["rms"]),
+                         _fmt(row["corrected"]["rms"]), _fmt(row["calibrated"]["max"]), _fmt(row["corrected"]["max"])))
+        e = v.get("estimator")
+        if e and "error" not in e["nominal"] and "error" not in e["corrected"]:
+            for name in ("tau_compliance", "tau_ukf"):
+                rows.append((v["path"], f"{name} vs sensor", _fmt(e["nominal"][name]["rms"]), "",
+                             _fmt(e["corrected"][name]["rms"]), "", _fmt(e["corrected"][name]["max"])))
+    return ("<h2>Other recordings (never fitted)</h2><p>The corrected model on recordings the diagnosis did not "
+            "see: residual per channel with the nominal, the calibrated (no findings) and the corrected "
+            "parameters, each with the encoder zero and the current alignment placed on that recording.</p>"
+            + _table(rows, ["recording", "channel", "RMS nominal", "RMS calibrated",
+                            "RMS corrected", "max calibrated", "max corrected"])
+            + _extrapolation_notes(entries))
+
+
+def _limits_section(limits: list[dict]) -> str:
+    """The smallest size of each effect tested and not found that this recording would have shown."""
+    rows = [(x["effect"] + "".join(f" at {angle} order {_fmt(order)}" for angle, order in x.get("orders", []))
+             + (f" with {values_in_text(x['with'])}" if x.get("with") else ""),
+             f"{x['parameter']} = {_fmt(x['reference'])}{unit_in_text(x['unit'])}"
+             + (f" ({x['reference_source']})" if x.get("reference_source") else ""),
+             "none up to 1024 times that (or the parameter's valid range)" if x["limit"] is None else
+             f"{x['parameter']} = {_fmt(x['limit'])}{unit_in_text(x['unit'])} "
+             f"({_fmt(x['times_reference'])} times the reference)")
+            for x in limits]
+    return ("<h2>How large an effect this recording would show</h2><p>Each effect tested and not found, planted "
+            "into the corrected model at sizes around a reference; what calibration would take of it removed, the "
+            "rest judged by the diagnosis's own test. An effect smaller than its limit may be present unseen; "
+            "the limit is a lower bound (the effect's fit is taken to find its exact terms).</p>"
+            + _table(rows, ["effect", "reference size", "smallest size shown"]))
+
+
+def _extrapolation_notes(entries: list[dict]) -> str:
+    """A sentence per recording that leaves the fitted operating range: its figures test the model's form there."""
+    notes = [f"<li><b>{html.escape(str(v['path']))}</b>: {html.escape(q['warning'])}</li>"
+             for v in entries for q in v.get("extrapolation", []) if q.get("warning")]
+    if not notes:
+        return ""
+    return ("<p>Extrapolated: these recordings go where the diagnosed one did not, so their figures test "
+            "the model's form there rather than its fitted parameters.</p><ul>" + "".join(notes) + "</ul>")
+
+
+def build(result, doc: dict) -> str:
+    """The report's HTML for a finished diagnosis (DiagnosisResult) and its findings document."""
+    diag = result.engine
+    rec, kin = diag.rec, diag.prep.kin
+    p0, p1 = result.calibrated_params, doc["params"]
+    sections = []
+
+    # Where: every channel's residual over time, before and after, segments marked.
+    segs = [s for f in doc["findings"] for s in f["where"]["time_segments"]]
+    figs = []
+    for c in diag.channels:
+        before, after = diag.shown_residual(c, p0), diag.shown_residual(c, p1)
+        figs.append(_img(_figure(lambda ax: dp.residual_over_time(ax, rec.time, before, after, segs,
+                                                                   f"{c.name} residual")),
+                         f"Residual of the {c.name} channel over time (located segments shaded)"))
+        figs.append(_img(_figure(lambda ax: dp.residual_vs_feature(ax, kin.omega_m, before, after,
+                                                                    "motor speed (rad/s)"), (6, 3)),
+                         f"{c.name}: mean residual vs motor speed (regime)"))
+        orders = candidate_orders("theta_m", np.ptp(rec.theta_m))
+        if orders:
+            figs.append(_img(_figure(lambda ax: dp.order_spectrum(ax, rec.theta_m, before, after, orders,
+                                                                   "theta_m"), (6, 3)),
+                             f"{c.name}: order spectrum of the residual over the motor angle"))
+    sections.append("<h2>Where the model and the recording differ</h2>" + "".join(figs))
+
+    # The torque-torsion loop, where the transmission is involved.
+    trans = [c for c in diag.channels if "transmission" in c.parts()]
+    if trans:
+        from hdjoint import _core
+        from hdjoint.io import parameters
+        est = _core.compliance(parameters.for_estimator(p1), rec.i_m, rec.theta_m, rec.theta_l)
+        reference = diag.reference_torque(p1)
+        sections.append("<h2>Torque against torsion</h2>" + _img(
+            _figure(lambda ax: dp.torque_torsion_loop(ax, est["dtheta_f"], reference, est["tau_compliance"]),
+                    (6, 4)), "Reference torque vs flexspline torsion: loops mean hysteresis, flats backlash"))
+
+    # Findings.
+    if doc["findings"]:
+        rows = [(f["effect"], f["kind"], f["where"]["part"], f"{f['p_value']:.2g}", f["confidence"],
+                 _fmt(f["fit"]["holdout_rms_before"]), _fmt(f["fit"]["holdout_rms_after"])) for f in doc["findings"]]
+        parts = ["<h2>Findings</h2>", _table(rows, ["effect", "kind", "part", "p-value", "confidence",
+                                                    "held-out RMS before (N.m)", "after (N.m)"])]
+        for f in doc["findings"]:
+            ev = f["evidence"]
+            text = (f"<h3>{html.escape(f['effect'])} ({html.escape(f['kind'])}, p = {f['p_value']:.2g})</h3>"
+                    f"<p><b>Left out:</b> {html.escape(ev['physics_left_out'])}. <b>Model:</b> "
+                    f"{html.escape(f['model'])}.</p><p><b>Where:</b> {html.escape(_where_text(f['where']))}.</p>")
+            if "held_out_gain" in ev:
+                runner = (f"{ev['runner_up']['effect']} (held-out gain {100 * ev['runner_up']['held_out_gain']:.2f} %)"
+                          if ev["runner_up"] else "none")
+                seen = (f" of {html.escape(ev['seen_on'])}, the torque channels together predicting no worse with "
+                        "it (the encoders cannot tell it from an encoder's own error at that order)"
+                        if ev.get("seen_on") else "")
+                text += (f"<p><b>Evidence:</b> held-out gain {100 * ev['held_out_gain']:.2f} %{seen} (z = {ev['z']}, "
+                         f"{ev['folds_improved']} folds better), p = {f['p_value']:.2g} against a simulated null, "
+                         f"ΔBIC {ev['delta_bic']}, runner-up {html.escape(runner)}.</p>")
+            if f.get("separate_by"):
+                text += f"<p><b>Look-alikes:</b> {html.escape(f['separate_by'])}</p>"
+            parts.append(text + f"<p>{_finding_line(f)}</p>")
+        sections.append("".join(parts))
+
+    # Fit before/after and the estimator.
+    labels = [c.name for c in diag.channels]
+    rb = [float(np.sqrt(np.nanmean(diag.shown_residual(c, p0)[diag.test] ** 2))) for c in diag.channels]
+    ra = [float(np.sqrt(np.nanmean(diag.shown_residual(c, p1)[diag.test] ** 2))) for c in diag.channels]
+    fit_html = _img(_figure(lambda ax: dp.rms_bars(ax, labels, rb, ra, "held-out RMS residual (N.m)"), (6, 3)),
+                    "Held-out residual RMS per channel: calibrated nominal vs corrected model")
+    if doc.get("estimator"):
+        e = doc["estimator"]
+        rows = [(name, _fmt(e["nominal"][name]["rms"]), _fmt(e["corrected"][name]["rms"]),
+                 _fmt(e["nominal"][name]["max"]), _fmt(e["corrected"][name]["max"]))
+                for name in ("tau_compliance", "tau_ukf") if "error" not in e["nominal"] and "error" not in e["corrected"]]
+        failed = [f"{label} parameters: {e[label]['error']}" for label in ("nominal", "corrected") if "error" in e[label]]
+        fit_html += "<h3>Torque estimators against the torque sensor</h3>" + _table(
+            rows, ["estimate", "RMS nominal", "RMS corrected", "max nominal", "max corrected"])
+        fit_html += "".join(f"<p>The estimator did not run with the {html.escape(f)}</p>" for f in failed)
+    sections.append("<h2>Fit before and after</h2>" + fit_html)
+    if doc.get("validation"):
+        sections.append(_validation_section(doc["validation"]))
+
+    cal = [(n, _fmt(v["nominal"]), _fmt(v["estimate"]), f"[{_fmt(v['lo'])}, {_fmt(v['hi'])}]", _fmt(v["tolerance"]),
+            f"{v['z']:.2f}", "yes" if v["identified"] else "no") for n, v in doc["calibration"].items()]
+    sections.append("<h2>Calibration of the nominal parameters</h2><p>Maximum a posteriori, each parameter's "
+                    "tolerance its prior; 95 % intervals from the Laplace approximation; z = (estimate - nominal) / "
+                    "tolerance; identified: the recording narrows the prior by more than half.</p>" + _table(
+                        cal, ["parameter", "nominal", "estimate", "95 % interval", "tolerance", "z", "identified"]))
+    if doc["unexplained"]:
+        sections.append("<h2>Unexplained structure</h2>" + _table(
+            [(u["channel"], u["feature"], u["held_out_gain"], u["largest_at"]) for u in doc["unexplained"]],
+            ["channel", "feature", "held-out gain", "largest at"]))
+    if doc.get("detection_limits"):
+        sections.append(_limits_section(doc["detection_limits"]))
+    if doc["not_testable"]:
+        sections.append("<h2>Not testable on this recording</h2>" + _table(
+            [(n["effect"], n["reason"]) for n in doc["not_testable"]], ["effect", "why"]))
+
+    title = f"hdjoint diagnosis: {doc['verdict']}"
+    return ("<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>" + html.escape(title) +
+            "</title><style>body{font-family:sans-serif;max-width:70em;margin:1.5em auto;color:#222}"
+            "table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:.2em .5em}"
+            "img{max-width:100%}figure{margin:.5em 0}figcaption{font-size:.85em;color:#555}"
+            ".summary{border:2px solid #446;padding:.3em 1em;background:#f4f4fb}.verdict{font-size:1.15em}"
+            "</style></head><body>"
+            f"<h1>{html.escape(title)}</h1>" + _summary(doc) +
+            f"<p>{html.escape(_recording_text(doc))}; diagnosed in {doc.get('seconds', '?')} s.</p>"
+            + "".join(sections) + "</body></html>")

@@ -1,0 +1,30 @@
+"""The FMUs this package ships (built by CMake into the wheel)."""
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+FMU_NAMES = ("JointTorqueEstimator", "HarmonicDriveJoint", "JointController")
+_FMU_DIR = Path(__file__).parents[1] / "fmus"  # installed at the package's top by CMake
+
+
+def fmu_path(name: str) -> Path:
+    """Path of a shipped FMU, by model identifier."""
+    if name not in FMU_NAMES:
+        raise ValueError(f"unknown FMU '{name}'; known: {', '.join(FMU_NAMES)}")
+    path = _FMU_DIR / f"{name}.fmu"
+    if not path.is_file():
+        raise FileNotFoundError(f"{path} is missing: the package was installed without its FMUs (pip install .)")
+    return path
+
+
+def export_fmus(out_dir: str | Path) -> list[Path]:
+    """Copy every FMU into out_dir; returns the written paths."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+    for name in FMU_NAMES:
+        target = out / f"{name}.fmu"
+        shutil.copyfile(fmu_path(name), target)
+        written.append(target)
+    return written

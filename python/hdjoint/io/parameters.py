@@ -1,0 +1,227 @@
+"""Parameter sets: the table (from the C++ core, the one source of truth),
+defaults, and JSON / SSP (.ssv) files in the contract's format."""
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from xml.sax.saxutils import quoteattr
+
+from hdjoint import _core
+
+
+class ParameterError(ValueError):
+    """A parameter set that names an unknown parameter or a bad value."""
+
+
+# Names a parameter file may still use from an earlier release, with the name
+# that replaced them. They are refused (never silently ignored, never
+# aliased): the error names each one and its replacement, so a file is
+# migrated by renaming (docs/estimators.md, "Parameters").
+RENAMED = {
+    "jsf_Jl": "Jl",                      # the joint-state filter's copy of the joint's link inertia
+    "jsf_Bl": "Bl",
+    "jsf_mgl": "mgl",
+    "jsf_motor_counts": "motor_counts",
+    "jsf_link_counts": "link_counts",
+}
+
+
+@dataclass(frozen=True)
+class ParameterInfo:
+    name: str
+    unit: str
+    default: float
+    min: float
+    max: float
+    scope: str  # "shared", "plant" or "estimator"
+    description: str
+    value_reference: int
+    # The calibration prior (src/hdjoint/parameter_tolerance.def): NaN when never calibrated.
+    tolerance_relative: float = math.nan
+    tolerance_absolute: float = math.nan
+    tolerance_source: str = ""
+
+    def calibrated(self) -> bool:
+        return not math.isnan(self.tolerance_relative)
+
+    def tolerance(self, nominal: float, relative: float | None = None) -> float:
+        """One standard deviation of the prior around `nominal`: max(relative*|nominal|, absolute)."""
+        rel = self.tolerance_relative if relative is None else relative
+        return max(rel * abs(nominal), self.tolerance_absolute)
+
+    def in_estimator(self) -> bool:
+        return self.scope in ("shared", "estimator")
+
+    def in_plant(self) -> bool:
+        return self.scope in ("shared", "plant")
+
+
+@lru_cache(maxsize=1)
+def table() -> dict[str, ParameterInfo]:
+    """Every parameter by name, in the table's order."""
+    return {row["name"]: ParameterInfo(**row) for row in _core.parameter_table()}
+
+
+def unit_in_text(unit: str) -> str:
+    """' N.m' to follow a value in a sentence; nothing for a ratio (unit "1")."""
+    return "" if unit == "1" else f" {unit}"
+
+
+def values_in_text(values: dict[str, float]) -> str:
+    """'omega_s = 20 rad/s, Kt_warmup_tc = 10 s': parameter values in a sentence."""
+    return ", ".join(f"{n} = {v:.3g}{unit_in_text(table()[n].unit)}" for n, v in values.items())
+
+
+def defaults(scope: str = "all") -> dict[str, float]:
+    """Default values for 'all', 'estimator' or 'plant'."""
+    pick = {
+        "all": lambda p: True,
+        "estimator": ParameterInfo.in_estimator,
+        "plant": ParameterInfo.in_plant,
+    }[scope]
+    return {name: info.default for name, info in table().items() if pick(info)}
+
+
+@lru_cache(maxsize=1)
+def _estimator_names() -> frozenset[str]:
+    return frozenset(name for name, info in table().items() if info.in_estimator())
+
+
+def for_estimator(params: dict[str, float]) -> dict[str, float]:
+    """The subset of a parameter set the estimator takes (a KeyError names an unknown parameter)."""
+    names = _estimator_names()
+    out = {k: v for k, v in params.items() if k in names}
+    if len(out) < len(params):
+        info = table()
+        for k in params:
+            info[k]  # noqa: B018 (an unknown name raises, as it always did)
+    return out
+
+
+def for_plant(params: dict[str, float]) -> dict[str, float]:
+    """The subset of a parameter set the joint takes."""
+    info = table()
+    return {k: v for k, v in params.items() if info[k].in_plant()}
+
+
+def check(params: dict, source: str = "parameter set") -> dict[str, float]:
+    """Validate names, types and ranges; returns the set as floats."""
+    info = table()
+    if not isinstance(params, dict):
+        raise ParameterError(f"{source}: expected a JSON object of name: value")
+    renamed = [f"'{old}' is now '{RENAMED[old]}'" for old in params if old in RENAMED]
+    if renamed:
+        raise ParameterError(f"{source}: renamed parameter{'s' if len(renamed) > 1 else ''}: "
+                             + "; ".join(renamed) + " (one joint, one parameter set: rename them; if the file sets "
+                             "both names, keep the value that describes the joint)")
+    checked = {}
+    for name, value in params.items():
+        if name not in info:
+            raise ParameterError(f"{source}: unknown parameter '{name}'")
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ParameterError(f"{source}: parameter '{name}' must be a number, not {value!r}")
+        value = float(value)
+        p = info[name]
+        if not math.isfinite(value) or not p.min <= value <= p.max:
+            raise ParameterError(
+                f"{source}: parameter '{name}' = {value!r} is outside its valid range [{p.min}, {p.max}] {p.unit}")
+        checked[name] = value
+    problem = _core.check_parameters({**defaults(), **checked})  # rules across the table (encoder counts, delay)
+    if problem is not None:
+        raise ParameterError(f"{source}: {problem}")
+    return checked
+
+
+# The parameter file's key for the user's own calibration priors:
+# {"Kt": 0.046, "tolerance": {"Kt": 0.1}} states Kt to +-10 % (relative).
+TOLERANCE_KEY = "tolerance"
+
+
+def _read_json(path) -> dict:
+    try:
+        text = Path(path).read_text()
+    except OSError as e:
+        raise ParameterError(f"{path}: cannot read the parameter file ({e.strerror})") from None
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as e:
+        raise ParameterError(f"{path}: line {e.lineno}, column {e.colno}: not valid JSON ({e.msg})") from None
+    if not isinstance(data, dict):
+        raise ParameterError(f"{path}: expected a JSON object of name: value")
+    return data
+
+
+def check_tolerances(overrides, source: str = "parameter set") -> dict[str, float]:
+    """Validate the user's relative tolerances: known, calibrated parameters, finite and positive."""
+    info = table()
+    if not isinstance(overrides, dict):
+        raise ParameterError(f"{source}: '{TOLERANCE_KEY}' must be an object of name: relative tolerance")
+    checked = {}
+    for name, value in overrides.items():
+        if name not in info:
+            raise ParameterError(f"{source}: '{TOLERANCE_KEY}' names an unknown parameter '{name}'")
+        if not info[name].calibrated():
+            raise ParameterError(f"{source}: '{TOLERANCE_KEY}' names '{name}', which the diagnosis never calibrates")
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+            raise ParameterError(f"{source}: tolerance of '{name}' must be a positive number "
+                                 f"(a fraction of the nominal value, 0.1 for +-10 %), not {value!r}")
+        checked[name] = float(value)
+    return checked
+
+
+def load(path: str | os.PathLike | None) -> dict[str, float]:
+    """Defaults overridden by a JSON parameter file (None: defaults only).
+    Its optional "tolerance" object is checked here and read by load_tolerances."""
+    params = defaults()
+    if path is None:
+        return params
+    data = _read_json(path)
+    check_tolerances(data.pop(TOLERANCE_KEY, {}), str(path))
+    params.update(check(data, str(path)))
+    return params
+
+
+def load_tolerances(path: str | os.PathLike | None) -> dict[str, float]:
+    """The user's relative tolerances from a parameter file ({} when it states none)."""
+    if path is None:
+        return {}
+    return check_tolerances(_read_json(path).get(TOLERANCE_KEY, {}), str(path))
+
+
+def _atomic_write(path: str | os.PathLike, text: str) -> None:
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; a parameter file is an ordinary file
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def save(path: str | os.PathLike, params: dict[str, float]) -> None:
+    """Write a parameter set as JSON (contract format), atomically."""
+    _atomic_write(path, json.dumps(check(params), indent=2) + "\n")
+
+
+def save_ssv(path: str | os.PathLike, params: dict[str, float], name: str = "hdjoint") -> None:
+    """Write SSP 1.0 parameter values (.ssv) for the same set."""
+    info = table()
+    lines = ['<?xml version="1.0" encoding="UTF-8"?>',
+             f'<ssv:ParameterSet xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues"'
+             f' version="1.0" name={quoteattr(name)}>',
+             "  <ssv:Parameters>"]
+    for key, value in check(params).items():
+        unit = f" unit={quoteattr(info[key].unit)}" if info[key].unit != "1" else ""
+        lines.append(f'    <ssv:Parameter name={quoteattr(key)}><ssv:Real value="{value!r}"{unit}/></ssv:Parameter>')
+    lines += ["  </ssv:Parameters>", "</ssv:ParameterSet>", ""]
+    _atomic_write(path, "\n".join(lines))

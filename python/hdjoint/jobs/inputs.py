@@ -1,0 +1,81 @@
+"""The user's inputs and outputs, checked before any work: reading
+recordings and parameter files with errors that name the file, and refusing
+outputs that would overwrite an input or cannot be written."""
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+
+class UserError(Exception):
+    """Bad input from the user: reported in one line, exit code 2."""
+
+
+def read_params(path):
+    from hdjoint.io import parameters
+    try:
+        return parameters.load(path)
+    except parameters.ParameterError as e:
+        raise UserError(str(e)) from None
+
+
+def read_recording(path, time_unit: str | None = None):
+    """The whole recording, its time column converted to seconds from TIME_UNIT
+    (None: seconds, with the unit checked for plausibility)."""
+    from hdjoint.io.recording import RecordingError, read_recording as read
+    from hdjoint.io.timebase import TIME_UNITS, TimeBaseError, check_step
+    try:
+        rec = read(path)
+        rec.time = rec.time * TIME_UNITS[time_unit or "s"]
+        check_step(str(path), rec.median_step, time_unit)
+    except (RecordingError, TimeBaseError) as e:
+        raise UserError(str(e)) from None
+    return rec
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    try:
+        return os.path.samefile(a, b)  # follows links: another path to the same file is caught
+    except OSError:
+        return False  # one of them does not exist (yet)
+
+
+def check_output_file(path, inputs=()) -> None:
+    """Refuse, before any work, an output file that is one of INPUTS (by any
+    path), a directory, or in a missing or unwritable directory."""
+    out = Path(path)
+    for given in inputs:
+        if given is not None and _same_file(out, Path(given)):
+            raise UserError(f"{path}: is the input {given}; refusing to write over it (choose another output)")
+    if out.is_dir():
+        raise UserError(f"{path}: is a directory; the output must name a file")
+    _check_writable_directory(path, out.absolute().parent)
+
+
+def _check_writable_directory(path, directory: Path) -> None:
+    if not directory.is_dir():
+        what = "is not a directory" if directory.exists() else "does not exist"
+        raise UserError(f"{path}: the directory {directory} {what}")
+    if not os.access(directory, os.W_OK | os.X_OK):
+        raise UserError(f"{path}: the directory {directory} is not writable")
+
+
+def check_output_directory(out, names, inputs=()) -> None:
+    """Refuse, before any work, an output directory that is a file, or whose
+    NAMES (the files to be written) are directories or inputs; a missing one
+    needs a writable existing ancestor (it is created once all is computed)."""
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise UserError(f"{out}: exists and is not a directory")
+    for name in names:
+        target = out / name
+        if target.is_dir():
+            raise UserError(f"{target}: is a directory, where the file {name} would be written")
+        for given in inputs:
+            if given is not None and _same_file(target, Path(given)):
+                raise UserError(f"{target}: is the input {given}; refusing to write over it")
+    ancestor = out.absolute()
+    while not ancestor.exists():
+        ancestor = ancestor.parent
+    _check_writable_directory(out, ancestor)
