@@ -54,7 +54,7 @@ def main():
           f"delta BIC {h.delta_bic:.0f}; " + ", ".join(f"{n} = {h.params_after[n]:.3g}" for n in h.fitted))
     channels = diag.channels_of(effect.part)
     held = diag.fit(dict(p, **values), diag._anchors(effect.part, effect.stateful), channels)
-    g = held_out_gain_sq(diag._squared(p, channels), diag._squared(held.params, channels), diag.fold, diag.test)
+    g = held_out_gain_sq(diag.squared(p, channels), diag.squared(held.params, channels), diag.fold, diag.test)
     print(f"  held at the truth: held-out gain {g.gain:.3f}, z {g.z:.2f}, folds better {np.mean(g.fold_gains > 0):.2f}")
     moved = {n: round(float(c.z), 1) for n, c in diag.calibration_of(diag.last_fit, p).items() if abs(c.z) > 3}
     print(f"  calibrated beyond three tolerances: {moved or 'none'}")

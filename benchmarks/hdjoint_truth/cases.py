@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from hdjoint.diagnosis.effects import EFFECTS, TruthDraw
 from hdjoint.io import parameters
 from hdjoint_truth.excitations import EXCITATIONS
 from hdjoint_truth.physics import Form
@@ -97,51 +98,13 @@ def _draw_form(rng, present, rotor_inertia: float) -> Form:
 
 
 def _add_effect(effect: str, truth: dict, form: Form, sensor: CurrentSensor, rng, size: float = 1.0) -> None:
-    """Put `effect` into the truth, in a form of its own, at a concealed size
-    times `size` (what the effect does grows with it: an amplitude, a
-    compliance, a loop's height, a lost motion's width; gravity has none)."""
-    s = lambda: float(rng.uniform(0.8, 1.2))  # noqa: E731 (one size factor per draw)
-    z = lambda: size * s()  # noqa: E731 (the same draws at any size: size=1 is the benchmark's joint)
-    if effect == "kinematic_error":
-        if rng.random() < 0.5:
-            form.extra_kinematic += [("m", 3.0, 6e-6 * z(), -4e-6 * z()), ("m", 5.0, 4e-6 * z(), 0.0)]
-        else:
-            form.extra_kinematic += [("l", 2.0, 3e-5 * z(), 2e-5 * z()), ("m", 4.0, 5e-6 * z(), 0.0)]
-    elif effect == "wave_generator_compliance":
-        truth.update(Kw=40.0 * s() / size, Cw=10.0 * s())
-    elif effect == "stiffness_nonlinearity":
-        truth["Cf"] = 0.0645 * z()
-    elif effect == "coulomb_friction":
-        truth["Fc"] = 0.015 * z()
-    elif effect == "stribeck_friction":
-        truth.update(Fs=0.01 * z(), omega_s=8.0 * s())
-    elif effect == "viscous_friction":
-        truth["Bm"] = 1.5e-4 * z()
-    elif effect == "hysteresis":
-        if rng.random() < 0.5:
-            form.hysteresis = "bouc_wen"  # its loop's height is A / (beta + gamma)
-            truth.update(bw_A=3e4 * z(), bw_beta=2e5, bw_gamma=1e5)
-        else:
-            form.hysteresis = "dahl_power"  # height H, over the same torsion at any size
-            truth.update(dahl_H=0.1 * z(), dahl_rate=3e4 * z())
-    elif effect == "backlash":
-        truth["backlash"] = 2e-5 * z()
-    elif effect == "cogging":
-        truth.update(cog_order=float(rng.choice([4.0, 6.0, 8.0])), cog_a=1.2e-3 * z(), cog_b=0.8e-3 * z())
-    elif effect == "time_delay":
-        if rng.random() < 0.5:
-            sensor.lag = 2.5e-3 * z()
-        else:
-            sensor.delay = 2e-3 * size
-    elif effect == "thermal_drift":
-        form.thermal = str(rng.choice(["kt", "friction"]))
-        truth.update(warmup_gain=(-0.04 if form.thermal == "kt" else -0.35) * z(), warmup_tc=15.0 * s())
-    elif effect == "gravity_load":
-        pass  # the truth keeps its gravity; the nominal set has mgl = 0
-    elif effect == "link_friction":
-        truth["Fl"] = 0.25 * z()
-    else:
+    """Put `effect` into the truth, in a form of its own (each effect says how:
+    Effect.plant_in_truth), at a concealed size times `size` (what the effect
+    does grows with it: an amplitude, a compliance, a loop's height, a lost
+    motion's width; gravity has none)."""
+    if effect not in EFFECTS:
         raise ValueError(f"no truth form for effect {effect!r}")
+    EFFECTS[effect].plant_in_truth(TruthDraw(truth, form, sensor, rng, size))
 
 
 def _draw_setup(rng, excitation: str, duration: float, seed: int, sensor: CurrentSensor) -> Setup:

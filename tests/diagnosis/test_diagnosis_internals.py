@@ -48,7 +48,8 @@ def test_every_effect_of_the_library_has_its_parameters_in_the_model():
     """The diagnosis skips an effect whose parameters the model lacks; in this
     build every effect must be testable, so a typo cannot drop one silently."""
     from hdjoint.io import parameters
-    from hdjoint.diagnosis.effects import EFFECTS, KINEMATIC_EXTRA
+    from hdjoint.diagnosis.effects import EFFECTS
+    from hdjoint.diagnosis.part_torques import KINEMATIC_EXTRA
     table = parameters.table()
     for effect in EFFECTS.values():
         for name in effect.params:

@@ -14,7 +14,8 @@ import pytest
 
 from hdjoint.diagnosis import effects
 from hdjoint.diagnosis.engine import Diagnosis
-from hdjoint.diagnosis.effects import EFFECTS, FREQUENCY_FOLLOWS_TIME, frequency_time_correlation
+from hdjoint.diagnosis.effects import EFFECTS
+from hdjoint.diagnosis.effects.needs import FREQUENCY_FOLLOWS_TIME, frequency_time_correlation
 from hdjoint_truth.cases import CONTROL_CASES, draw, record
 
 pytestmark = pytest.mark.slow  # each draws and simulates the truth's recordings

@@ -3,7 +3,7 @@
 the speed is held in its range, not by gain where the speed passes through zero."""
 import numpy as np
 
-from hdjoint.diagnosis.friction_lookalike import HELD_FOR, held_speed, steady_evidence
+from hdjoint.diagnosis.effects.stribeck_friction import HELD_FOR, held_speed, steady_evidence
 from hdjoint.diagnosis.kinematics import Kinematics
 
 STEP = 1e-3

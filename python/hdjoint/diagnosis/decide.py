@@ -3,8 +3,6 @@ gain is a finding; a look-alike that explains as much, and cannot be told
 apart fold by fold, makes it ambiguous."""
 from __future__ import annotations
 
-from scipy.stats import norm
-
 from hdjoint.diagnosis.hypotheses import Finding, Hypothesis
 from hdjoint.diagnosis.rules import SEPARATED_RATIO, SEPARATED_Z
 from hdjoint.diagnosis.structure import fold_z
@@ -30,18 +28,12 @@ def rival(best: Hypothesis, other: Hypothesis) -> bool:
     return (other.accepted() or other.explains_as_much_as(best)) and not separated(best, other)
 
 
-def confidence_of(h: Hypothesis) -> float:
-    """A finding's confidence before sharing it with look-alikes: how far its
-    held-out z (Hypothesis.evidence_z) clears 2, times one less its multiplicity-corrected p-value."""
-    return float(norm.cdf(h.evidence_z() - 2.0)) * (1.0 - h.p_value)
-
-
 def finding_for(best: Hypothesis, others: list[Hypothesis]) -> Finding:
     """An added finding, or an ambiguous one when a look-alike explains the same
     structure and is significant on its own."""
     rivals = [o for o in others if rival(best, o)]
     runner_up = others[0] if others else None
-    confidence = confidence_of(best)
+    confidence = best.confidence()
     if not rivals:
         return Finding(best.effect, "added", best.params_before, best.params_after, best.fitted, best.p_value,
                        round(confidence, 3), best, runner_up=runner_up)

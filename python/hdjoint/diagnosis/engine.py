@@ -36,20 +36,18 @@ from scipy.stats import norm
 from hdjoint.diagnosis.calibration import Calibrated, Prior, posterior_std, priors, robust_std, widened
 from hdjoint.diagnosis.channels import TORSION_VIEW, Channel, Evaluator, channels_for
 from hdjoint.diagnosis.current_alignment import align_current
-from hdjoint.diagnosis.decide import confidence_of, finding_for
+from hdjoint.diagnosis.decide import finding_for
 from hdjoint.diagnosis.effects import (
     ALWAYS_CALIBRATED,
     EFFECTS,
     Effect,
     calibrated_parameters,
-    fill_slots,
     orthogonal_parameters,
     owner,
     slot_on,
     testable,
 )
 from hdjoint.diagnosis.forked import map_forked
-from hdjoint.diagnosis.friction_lookalike import SMOOTHING_LOOKALIKE, held_speed, steady_evidence
 from hdjoint.diagnosis.hypotheses import Finding, Fit, Hypothesis, delta_bic
 from hdjoint.diagnosis.kinematics import kinematics
 from hdjoint.diagnosis.part_torques import Prepared, sharp_transmission, tau_transmission, torsion_less_kinematic
@@ -186,7 +184,7 @@ class Diagnosis:
             out.append(np.where(np.isfinite(r), r, 1e3))
         return np.concatenate(out)
 
-    def _squared(self, p, channels) -> np.ndarray:
+    def squared(self, p, channels) -> np.ndarray:
         """Per-sample sum of normalised squared residuals over `channels`."""
         total = np.zeros(len(self.rec))
         for c in channels:
@@ -412,8 +410,8 @@ class Diagnosis:
             return None
         if effect.seen_on_torsion and not self.has_sensor:
             return self._try_on_torsion(effect, p, channels)
-        trial, names, orders = effect.candidates(
-            effect, p, lambda q, angles: self.order_search(q, effect.part, channels, angles))
+        trial, names, orders = effect.trial(
+            p, lambda q, angles: self.order_search(q, effect.part, channels, angles))
         if not names:
             if effect.order_angles:
                 self._no_order_found(effect, channels)
@@ -421,8 +419,8 @@ class Diagnosis:
         anchors = self._anchors(effect.part, effect.stateful)
         names_all = names + [a for a in anchors if a not in names]
         fit = self.fit(trial, names_all, channels, self._starts(effect, names), HYPOTHESIS_FTOL)
-        per_before = [self._squared(p, [c]) for c in channels]
-        per_after = [self._squared(fit.params, [c]) for c in channels]
+        per_before = [self.squared(p, [c]) for c in channels]
+        per_after = [self.squared(fit.params, [c]) for c in channels]
         before, after = sum(per_before), sum(per_after)
         gain = held_out_gain_sq(before, after, self.fold, self.test)
         # Held-out change of each channel on its own: a real effect does not
@@ -481,7 +479,7 @@ class Diagnosis:
         0, came with Kf refitted from 21500 to 9100 N.m/rad; without the loop
         the refitted set kept its whole held-out gain (56 %)."""
         without = dict(fitted, **{n: p[n] for n in names})
-        own = held_out_gain_sq(self._squared(without, channels), after, self.fold, self.test)
+        own = held_out_gain_sq(self.squared(without, channels), after, self.fold, self.test)
         if own.gain > MIN_GAIN:
             return None
         moved = [n for n in fitted if n not in names and fitted[n] != p.get(n)]
@@ -499,7 +497,7 @@ class Diagnosis:
         torsion = torsion_less_kinematic(self.prep, p)
         nuisance = torsion_nuisances(self.torsion_torque(p), self.rec.theta_l)
         tried, passing = self.torsion_orders(effect, p, torsion, nuisance, effect.order_angles)
-        trial, names, chosen = fill_slots(effect, p, passing, limit=2)
+        trial, names, chosen = effect.fill_slots(p, passing, limit=2)
         if not chosen:
             self._orders_seen = [Order(o.angle, o.order, o.amplitude, o.gain, float("nan"), TORSION_VIEW)
                                  for o in tried]
@@ -521,8 +519,8 @@ class Diagnosis:
         # Pooled, as every hypothesis's gain pools them: on LARA8 joint 2 the motor view's held-out
         # error fell 33 % while the link view's, 117 N.m of gravity the nominal set lacks, rose 2.8 %.
         trial = self.fit(trial, self._anchors(effect.part), channels, ftol=HYPOTHESIS_FTOL).params
-        pooled = float(np.nanmean(self._squared(trial, channels)[self.test]) /
-                       max(np.nanmean(self._squared(p, channels)[self.test]), 1e-300))
+        pooled = float(np.nanmean(self.squared(trial, channels)[self.test]) /
+                       max(np.nanmean(self.squared(p, channels)[self.test]), 1e-300))
         orders = [Order(o.angle, o.order, o.amplitude, o.gain, float("nan"), TORSION_VIEW) for _, o in chosen]
         return Hypothesis(effect, p, trial, names, joint.gain, float(dbic), orders, pooled_ratio=pooled,
                           p_raw=min(o.p_value for _, o in chosen), seen_on=TORSION_VIEW, intervals=intervals)
@@ -610,7 +608,7 @@ class Diagnosis:
         return NullNoise(np.stack([np.where(self.used, np.nan_to_num(self.normalised_residual(c, p)),
                                             0.0) for c in self.channels]), compared=self.eval.compared_by_channel())
 
-    def candidates(self, p: dict) -> list[Effect]:
+    def testable_effects(self, p: dict) -> list[Effect]:
         """Effects the nominal set lacks that this recording can test."""
         out = []
         known = parameters.table()
@@ -627,7 +625,7 @@ class Diagnosis:
         return out
 
     def select(self, p: dict) -> tuple[dict, list[Finding]]:
-        candidates = self.candidates(p)
+        candidates = self.testable_effects(p)
         findings: list[Finding] = []
         while candidates:
             self.say(f"testing {len(candidates)} hypotheses ({', '.join(e.id for e in candidates)})")
@@ -656,8 +654,7 @@ class Diagnosis:
             best = accepted[0]
             others = [h for h in tried if h is not best]
             finding = finding_for(best, others)
-            if best.effect.id == "stribeck_friction" and EFFECTS["coulomb_friction"].is_on(self.nominal):
-                finding = self._stribeck_or_smoothing(finding)
+            finding = best.effect.settle(finding, self)  # the effect's own special case, if any
             self.say(f"found {finding.effect.id} ({finding.kind}): held-out gain {100 * best.gain.gain:.1f} %, "
                      f"p = {best.p_value:.2g}")
             # Refit everything so calibration and the new terms settle together (terms seen on
@@ -673,27 +670,6 @@ class Diagnosis:
             lookalike_ids = {a.effect.id for a in finding.alternatives}
             candidates = [e for e in candidates if e is not best.effect and e.id not in lookalike_ids]
         return p, findings
-
-    def _stribeck_or_smoothing(self, finding: Finding) -> Finding:
-        """An accepted Stribeck rise, or Coulomb friction of another shape
-        near zero speed (friction_lookalike.py): told apart only by its
-        held-out gain at held slow speeds; otherwise one ambiguous finding."""
-        h = finding.hypothesis
-        channels = self.channels_of(h.effect.part)
-        held = held_speed(self.prep.kin, self.rec.time)
-        steady = steady_evidence(self._squared(h.params_before, channels), self._squared(h.params_after, channels),
-                                 held, self.fold, self.test)
-        finding.steady_evidence = steady
-        self.say(f"stribeck_friction at held slow speeds: gain {steady.gain:.3g} (z = {steady.z:.2g}, "
-                 f"{steady.folds} folds, {100 * steady.held_share:.0f} % of the held-out samples)")
-        if steady.separates:
-            return finding
-        lookalike = replace(h, effect=SMOOTHING_LOOKALIKE, params_after=h.params_before, fitted=[],
-                            gain=replace(h.gain, gain=h.gain.gain * (1.0 - steady.steady_share)), orders=[])
-        alternatives = [a for a in finding.alternatives if a.effect.id != "coulomb_friction"] + [lookalike]
-        share = h.gain.gain / (h.gain.gain + sum(max(a.gain.gain, 0.0) for a in alternatives))
-        confidence = confidence_of(h) * share
-        return replace(finding, kind="ambiguous", alternatives=alternatives, confidence=round(confidence, 3))
 
     def unconfirmed_structure(self) -> list[dict]:
         """The unconfirmed hypotheses of the last round, as unexplained structure in their channels."""
@@ -729,8 +705,8 @@ class Diagnosis:
             # Both fits from the same start and by the same steps: only the held parameters differ.
             held = self.fit(dict(p, **edge), free, self.channels)
             unheld = self.fit(p, free + list(edge), self.channels)
-            gain = held_out_gain_sq(self._squared(held.params, self.channels),
-                                    self._squared(unheld.params, self.channels), self.fold, self.test)
+            gain = held_out_gain_sq(self.squared(held.params, self.channels),
+                                    self.squared(unheld.params, self.channels), self.fold, self.test)
             p_value = float(norm.sf(gain.z))
             self.say(f"{effect_id}: {', '.join(edge)} beyond tolerance; held to it, held-out gain "
                      f"{100 * gain.gain:.2f} % (z = {gain.z:.1f})")

@@ -205,35 +205,6 @@ def _hypothesis_alternative(h, share: float) -> dict:
                         {n: h.params_after[n] for n in _reported(h.fitted)})
 
 
-def loop_as_the_estimator_runs_it(diag, params: dict) -> dict | None:
-    """A fitted Dahl loop as the estimator FMU runs it: its compliance model
-    (C++, with its own delay line) on the raw recorded current and encoder
-    angles, where the diagnosis (against a sensor) drives the loop with the
-    torsion through the transmission's filter. The compliance torque's
-    held-out error against the sensor without and with the loop
-    (docs/diagnosis_measurements.md, "The fitted loop in the estimator FMU")."""
-    if not diag.has_sensor or not params.get("hys_H", 0.0) > 0.0:
-        return None
-    rec, rows = diag.rec, diag.test & np.isfinite(diag.rec.tau_sensor)
-
-    def held_out_rms(p) -> float:
-        native = parameters.for_estimator(p)
-        torque = diag.prep.per_window(lambda i, tm, tl: _core.compliance(native, i, tm, tl)["tau_compliance"],
-                                      rec.i_m, rec.theta_m, rec.theta_l)
-        error = (torque - rec.tau_sensor)[rows]
-        return float(np.std(error[np.isfinite(error)]))
-
-    without, with_loop = held_out_rms(dict(params, hys_H=0.0)), held_out_rms(params)
-    out = {"drive": "raw encoder angles (the estimator FMU)", "held_out_rms_without": round(without, 5),
-           "held_out_rms_with": round(with_loop, 5), "change": round(with_loop / without - 1.0, 4)}
-    if with_loop >= without:
-        out["caveat"] = (f"the estimator FMU, driving the loop with the raw encoder angles, does not gain from it "
-                         f"(held-out torque error {100 * out['change']:+.1f} %): it switches over "
-                         f"{params['hys_H'] / params['hys_sigma']:.2g} rad of torsion, and the diagnosis fitted it on the "
-                         "torsion through the transmission's filter, which the FMU does not apply")
-    return out
-
-
 def finding_document(result, f) -> dict:
     diag, final_params = result.engine, result.params
     out = {"effect": f.effect.id, "kind": f.kind, "p_value": f.p_value, "confidence": f.confidence,
@@ -267,20 +238,14 @@ def finding_document(result, f) -> dict:
         "runner_up": ({"effect": f.runner_up.effect.id, "held_out_gain": round(f.runner_up.gain.gain, 5)}
                       if f.runner_up else None),
     }
-    if f.steady_evidence is not None:
-        e = f.steady_evidence
-        out["evidence"]["at_held_slow_speeds"] = {
-            "share_of_held_out_samples": round(e.held_share, 3), "held_out_gain": _finite(e.gain, 4),
-            "z": _finite(e.z, 2), "folds": e.folds, "share_of_the_gain": round(e.steady_share, 3),
-            "tells_apart_from_smoothing": e.separates}
+    out["evidence"].update(f.own_evidence or {})
     if h.seen_on:
         out["evidence"]["seen_on"] = h.seen_on
     out["parameters"] = {n: final_params[n] for n in _reported(f.fitted)}
     out["intervals"] = h.intervals or {n: _interval(diag.last_fit.std, final_params, n) for n in f.fitted}
-    if f.effect.id == "hysteresis":
-        in_estimator = loop_as_the_estimator_runs_it(diag, final_params)
-        if in_estimator:
-            out["in_the_estimator"] = in_estimator
+    in_estimator = f.effect.in_the_estimator(diag, final_params)
+    if in_estimator:
+        out["in_the_estimator"] = in_estimator
     if f.kind == "ambiguous":
         hypotheses = [h] + f.alternatives
         total = sum(max(x.gain.gain, 0.0) for x in hypotheses) or 1.0

@@ -6,8 +6,9 @@ import math
 from dataclasses import dataclass, field
 
 from hdjoint.diagnosis.calibration import Calibrated
+from scipy.stats import norm
+
 from hdjoint.diagnosis.effects import Effect
-from hdjoint.diagnosis.friction_lookalike import SteadyEvidence
 from hdjoint.diagnosis.rules import FALSE_DISCOVERY_RATE, MIN_GAIN, SEEN_BIC, UNCONFIRMED_GAIN, steady_over_folds
 from hdjoint.diagnosis.structure import HeldOutGain, Order
 
@@ -62,6 +63,11 @@ class Hypothesis:
         """For the record: the z an effect uneven over the folds is judged by (nothing for the others)."""
         return {} if self.z_against_null is None else {"z_against_null": round(self.z_against_null, 2)}
 
+    def confidence(self) -> float:
+        """Its confidence before sharing it with look-alikes: how far its held-out
+        z (evidence_z) clears 2, times one less its multiplicity-corrected p-value."""
+        return float(norm.cdf(self.evidence_z() - 2.0)) * (1.0 - self.p_value)
+
     def accepted(self) -> bool:
         return self.p_value <= FALSE_DISCOVERY_RATE and self._held_out_evidence()
 
@@ -114,7 +120,7 @@ class Finding:
     runner_up: Hypothesis | None = None
     resized: list[Calibrated] = field(default_factory=list)
     resize_gain: HeldOutGain | None = None  # what the resize predicts held out (held at its tolerance against not)
-    steady_evidence: SteadyEvidence | None = None  # a Stribeck finding's gain at held speeds (friction_lookalike.py)
+    own_evidence: dict | None = None  # evidence the effect adds of its own (Effect.settle), for findings.json
 
     @property
     def orders(self) -> list[Order]:

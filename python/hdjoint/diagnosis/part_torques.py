@@ -23,6 +23,9 @@ from scipy.integrate import cumulative_trapezoid
 from hdjoint import _core
 from hdjoint.io import parameters
 from hdjoint.io.recording import Recording
+from hdjoint.diagnosis.effects import friction_law_parameters, part_parameters
+from hdjoint.diagnosis.effects.kinematic_error import EFFECT as KINEMATIC_ERROR
+from hdjoint.diagnosis.effects.kinematic_error import KINEMATIC_EQ7
 from hdjoint.diagnosis.kinematics import Kinematics, _Filter
 
 
@@ -101,8 +104,7 @@ TORSION_RATE_SIGMA = 0.0015  # s
 
 # The kinematic error's terms (transmission.cpp, kinematic_error): eq. (7)'s
 # amplitudes, and the slots of its extra orders (<slot>_order, <slot>_a, <slot>_b).
-KINEMATIC_EQ7 = ("al1", "bl1", "aw1", "bw1", "aw2", "bw2")
-KINEMATIC_EXTRA = ("ke_m1", "ke_m2", "ke_l1", "ke_l2")
+KINEMATIC_EXTRA = tuple(slot for slot, _ in KINEMATIC_ERROR.slots)
 # The kinematic error is linear in its amplitudes (a0, eq. (7)'s, the extra
 # orders' a and b) once the ratio, wave numbers and orders are fixed.
 KINEMATIC_AMPLITUDES = ("a0",) + KINEMATIC_EQ7 + tuple(f"{slot}_{k}" for slot in KINEMATIC_EXTRA for k in ("a", "b"))
@@ -281,10 +283,6 @@ def motor_friction(p: dict, omega: np.ndarray, t_rel: np.ndarray) -> np.ndarray:
     return _core.motor_friction(_native(p), np.ascontiguousarray(omega), np.ascontiguousarray(t_rel))
 
 
-# The parameters of the motor friction law (friction.h), for caching it.
-_FRICTION_PARAMETERS = ("Bm", "Fc", "omega_fc", "Fs", "omega_s", "Fc_drift")
-
-
 def smoothed_friction(prep: Prepared, p: dict) -> np.ndarray:
     """The motor friction as the motor equation sees it through the smoothing
     filter: the law on the encoders' speed, then smoothed. Friction switches
@@ -295,7 +293,7 @@ def smoothed_friction(prep: Prepared, p: dict) -> np.ndarray:
     speed was closer on the chirp, but while the motor creeps below a count
     per window that speed is quantisation, which a Stribeck term at
     omega_s = 0.006 rad/s then fitted.)"""
-    key = tuple(_get(p, n) for n in _FRICTION_PARAMETERS)
+    key = tuple(_get(p, n) for n in friction_law_parameters())
     if prep._friction is None or prep._friction[0] != key:
         law = motor_friction(p, prep.kin.omega_m, prep.t_rel)
         prep._friction = (key, prep.kin.smooth(law))
@@ -382,17 +380,11 @@ def tau_link(prep: Prepared, p: dict[str, float], index: np.ndarray | None = Non
 
 ESTIMATES = {"transmission": tau_transmission, "motor": tau_motor, "link": tau_link}
 
-# What each estimate reads, for caching: keep in step with the functions
-# above (tests/test_diagnosis_internals.py fails when a parameter is missing).
-_MOTOR_PARAMETERS = ("N", "Kt", "Jm", "Kt_warmup", "Kt_warmup_tc") + _FRICTION_PARAMETERS + (
-    "cog_order", "cog_a", "cog_b", "i_delay")
-_LINK_PARAMETERS = ("Jl", "Bl", "mgl", "Fl", "omega_fl")
-
-
 def depends_on(part: str) -> tuple[str, ...]:
-    """Every parameter the estimate of `part` depends on."""
-    if part == "motor":
-        return _MOTOR_PARAMETERS
-    if part == "link":
-        return _LINK_PARAMETERS
+    """Every parameter the estimate of `part` depends on, for caching it: the
+    motor's and the link's follow from the effects' definitions
+    (effects.part_parameters; tests/test_diagnosis_internals.py checks that
+    no other parameter changes them)."""
+    if part in ("motor", "link"):
+        return part_parameters(part)
     return tuple(n for n, info in parameters.table().items() if info.in_estimator()) + ("Df",)

@@ -4,7 +4,6 @@ outputs that would overwrite an input or cannot be written."""
 from __future__ import annotations
 
 import os
-import sys
 from pathlib import Path
 
 

@@ -14,15 +14,15 @@ on its own. It is judged on the Stribeck fit's own structure: Stribeck is
 told apart from it only by its held-out gain where the speed is held
 (`held_speed`). Without that evidence the two are one ambiguous finding,
 each with the share of the held-out gain it can claim. (A fit with omega_s
-below omega_fc never gets here: it is degenerate, effects.py's
-`_rise_inside_the_switch`; the LuGre fits above were of that kind.)"""
+below omega_fc never gets here: it is degenerate, `StribeckFriction.degenerate`; the LuGre fits above were of that kind.)"""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from hdjoint.diagnosis.effects import Effect
+from hdjoint.diagnosis.effects.base import Effect, Size, TruthDraw
+from hdjoint.diagnosis.effects.coulomb_friction import EFFECT as COULOMB
 from hdjoint.diagnosis.kinematics import Kinematics
 from hdjoint.diagnosis.rules import EVIDENCE_Z
 from hdjoint.diagnosis.structure import fold_z, relative_fold_gains
@@ -87,13 +87,71 @@ def steady_evidence(before: np.ndarray, after: np.ndarray, held: np.ndarray, fol
     return SteadyEvidence(share, gain, fold_z(relative), len(relative), min(max(steady_share, 0.0), 1.0))
 
 
-
 # The look-alike, as an entry of the effect library's kind (it names the
 # Coulomb law the nominal model already has, mis-shaped near zero speed).
+# Not a candidate of the library: it is never fitted on its own.
 SMOOTHING_LOOKALIKE = Effect(
     "coulomb_friction", "motor", (),
     "Coulomb friction of another shape near zero speed: a sharper smoothing than omega_fc allows, or bristles "
     "(LuGre) whose damping acts while the speed passes through zero",
     "not in the C++ law (a sharper tanh or a bristle state): judged on the Stribeck fit's structure",
-    lambda p: False, lookalikes=("stribeck_friction",),
+    lookalikes=("stribeck_friction",),
     revealed_by="the same held slow speeds: friction back at Fc once the speed is held (no Stribeck rise)")
+
+
+class StribeckFriction(Effect):
+    def degenerate(self, p: dict, torsion_span: float) -> str | None:
+        """A Stribeck rise narrower than the Coulomb law's own smoothing is no
+        rise: the law is (Fc + Fs*exp(-(w/omega_s)^2))*tanh(w/omega_fc), so with
+        omega_s below omega_fc the extra level lives only where tanh is still
+        switching, and beyond omega_fc friction is Fc again. What it fits is the
+        shape of the switch through zero speed, a Coulomb law of another shape
+        (a sharper or two-stage switch, LuGre's bristles)."""
+        if p["omega_s"] >= p["omega_fc"]:
+            return None
+        return (f"the fitted rise (omega_s = {p['omega_s']:.2g} rad/s) lies inside the Coulomb law's own switch "
+                f"(omega_fc = {p['omega_fc']:.2g} rad/s): it reshapes friction while the speed passes through zero, "
+                f"a Coulomb law of another shape, not friction above Fc at low speed")
+
+    def settle(self, finding, engine):
+        """Where the nominal set has Coulomb friction, an accepted Stribeck rise
+        or a Coulomb law of another shape near zero speed: told apart only by
+        its held-out gain at held slow speeds; otherwise one ambiguous finding."""
+        if not COULOMB.is_on(engine.nominal):
+            return finding
+        h = finding.hypothesis
+        channels = engine.channels_of(h.effect.part)
+        held = held_speed(engine.prep.kin, engine.rec.time)
+        steady = steady_evidence(engine.squared(h.params_before, channels), engine.squared(h.params_after, channels),
+                                 held, engine.fold, engine.test)
+        finding.own_evidence = {"at_held_slow_speeds": {
+            "share_of_held_out_samples": round(steady.held_share, 3), "held_out_gain": _finite(steady.gain, 4),
+            "z": _finite(steady.z, 2), "folds": steady.folds, "share_of_the_gain": round(steady.steady_share, 3),
+            "tells_apart_from_smoothing": steady.separates}}
+        engine.say(f"stribeck_friction at held slow speeds: gain {steady.gain:.3g} (z = {steady.z:.2g}, "
+                   f"{steady.folds} folds, {100 * steady.held_share:.0f} % of the held-out samples)")
+        if steady.separates:
+            return finding
+        lookalike = replace(h, effect=SMOOTHING_LOOKALIKE, params_after=h.params_before, fitted=[],
+                            gain=replace(h.gain, gain=h.gain.gain * (1.0 - steady.steady_share)), orders=[])
+        alternatives = [a for a in finding.alternatives if a.effect.id != SMOOTHING_LOOKALIKE.id] + [lookalike]
+        share = h.gain.gain / (h.gain.gain + sum(max(a.gain.gain, 0.0) for a in alternatives))
+        confidence = h.confidence() * share
+        return replace(finding, kind="ambiguous", alternatives=alternatives, confidence=round(confidence, 3))
+
+    def plant_in_truth(self, draw: TruthDraw) -> None:
+        draw.truth.update(Fs=0.01 * draw.scaled(), omega_s=8.0 * draw.jitter())
+
+
+def _finite(x: float, digits: int):
+    return round(float(x), digits) if np.isfinite(x) else None
+
+
+EFFECT = StribeckFriction(
+    "stribeck_friction", "motor", ("Fs", "omega_s"),
+    "Stribeck friction: higher friction at low speed", "(Fc + Fs*exp(-(omega/omega_s)^2))*tanh(...)",
+    switched_by=("Fs",), starts=({"Fs": 0.005, "omega_s": 3.0}, {"Fs": 0.01, "omega_s": 15.0},
+                                 {"Fs": 0.02, "omega_s": 50.0}),
+    needs=("low_speed",), lookalikes=("coulomb_friction",),
+    revealed_by="slow constant speeds (0.5-20 rad/s) held in both directions, not only passed through",
+    resizes=("Fs", "omega_s"), in_friction_law=True, size=Size("Fs", reference=(("Fs", 0.01),)), rank=2)
