@@ -17,6 +17,8 @@ Run: python benchmarks/effect_detectability.py [--seeds 0 1 2]
 writes docs/results/effect_detectability.md (and .jsonl, the raw rows)."""
 from __future__ import annotations
 
+import dataclasses
+
 import argparse
 import json
 import tempfile
@@ -25,8 +27,9 @@ from pathlib import Path
 
 from threadpoolctl import threadpool_limits
 
-from hdjoint.io import parameters
-from hdjoint.diagnosis.engine import Diagnosis
+from hdjoint.diagnosis.calibrate import calibrate
+from hdjoint.diagnosis.prepare import prepare
+from hdjoint.diagnosis.search import HypothesisSearch
 from hdjoint.diagnosis.effects import EFFECTS
 from hdjoint.io.recording import read_recording, write_recording
 from hdjoint_truth.cases import EFFECT_CASES, draw, record
@@ -108,17 +111,24 @@ def oracle_test(case, seed: int, duration: float, effect_id: str | None = None) 
         write_recording(csv, record(joint, 0))
         rec = read_recording(csv)
     with threadpool_limits(limits=1, user_api="blas"):
-        diag = Diagnosis(rec, nominal, None, None, 1)
-        p, diag.last_fit = diag.calibrate()
+        calibrated = calibrate(prepare(rec, nominal, workers=1))
+        p = calibrated.params
         # Orders are placed, not fitted (as the order search places them).
         fitted = [n for n in values if not n.endswith("order")]
-        effect = replace(EFFECTS[effect_id], starts=(values,),
-                         candidates=lambda e, q, search: (dict(q, **values), fitted, []))
-        h = diag.test_alone(effect, p)
+        effect = _at_values(replace(EFFECTS[effect_id], starts=(values,)), values, fitted)
+        h = HypothesisSearch(calibrated.objective, calibrated.current_alignment).test_alone(effect, p)
     return dict(row, held_out_gain=round(h.gain.gain, 5), z=round(h.evidence_z(), 2), p_value=h.p_raw,
                 delta_bic=round(h.delta_bic, 1), worst_channel_ratio=round(h.channel_ratio(), 3),
                 degenerate=h.degenerate, fitted={n: h.params_after[n] for n in values},
                 verdict="detectable" if h.accepted() else "not detectable")
+
+
+def _at_values(effect, values: dict, fitted: list[str]):
+    """The effect fitting its own terms from the truth's values (orders placed, not searched)."""
+    class AtValues(type(effect)):
+        def trial(self, p, search):
+            return dict(p, **values), fitted, []
+    return AtValues(**{f.name: getattr(effect, f.name) for f in dataclasses.fields(effect)})
 
 
 def missed(rows: list[dict], seeds: list[int]) -> list[tuple]:

@@ -36,7 +36,8 @@ import numpy as np
 from results import RESULTS_DIR, ResultsPage
 from threadpoolctl import threadpool_limits
 
-from hdjoint.diagnosis.engine import Diagnosis
+from hdjoint.diagnosis.calibrate import calibrate as calibrate_stage
+from hdjoint.diagnosis.prepare import prepare
 from hdjoint_truth.cases import CONTROL_CASES, draw, record
 
 Z95 = 1.959964
@@ -61,9 +62,10 @@ def calibrate(case, seed: int, duration: float) -> list[dict]:
     """Each calibrated parameter's error against the truth, in units of its
     raw posterior std (the wider of Laplace and sandwich, before any factor)."""
     joint = draw(case, seed, duration)
-    diag = Diagnosis(record(joint, 0), joint.nominal)
+    setup = prepare(record(joint, 0), joint.nominal)
     with threadpool_limits(limits=1, user_api="blas"):
-        p, fit = diag.calibrate()
+        calibrated = calibrate_stage(setup)
+        p, fit, diag = calibrated.params, calibrated.fit, calibrated.objective
     rows = []
     for name in diag.calibrated_names:
         truth = true_value(name, joint)

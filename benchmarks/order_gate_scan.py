@@ -20,7 +20,9 @@ import time
 
 from threadpoolctl import threadpool_limits
 
-from hdjoint.diagnosis.engine import Diagnosis
+from hdjoint.diagnosis.calibrate import calibrate
+from hdjoint.diagnosis.prepare import prepare
+from hdjoint.diagnosis.search import HypothesisSearch
 from hdjoint.diagnosis.rules import DOMINANT_GAIN
 from hdjoint_truth.cases import CONTROL_CASES, EFFECT_CASES, draw, record
 
@@ -38,17 +40,17 @@ def scan(job: tuple[str, int, int]) -> dict:
     truth = independent.truth_orders(joint)
     significant = []
     with threadpool_limits(limits=1, user_api="blas"):
-        diag = Diagnosis(record(joint, index), joint.nominal, None, None, 1)
-        p, diag.last_fit = diag.calibrate()
+        calibrated = calibrate(prepare(record(joint, index), joint.nominal, workers=1))
+        p, search = calibrated.params, HypothesisSearch(calibrated.objective, calibrated.current_alignment)
         for part, angles in SEARCHED:
-            channels = diag.channels_of(part)
+            channels = search.objective.channels_of(part)
             if not channels:
                 continue
-            diag.order_search(p, part, channels, angles)
+            seen = search.order_search(p, part, channels, angles).seen
             significant += [{"channel": o.channel, "angle": o.angle, "order": o.order, "gain": round(o.gain.gain, 4),
                              "z": round(o.gain.z, 2), "prominence": round(o.prominence, 2),
                              "truths": (o.angle, o.order) in truth}
-                            for o in diag._orders_seen if o.gain.significant]
+                            for o in seen if o.gain.significant]
     return {"case": name, "seed": seed, "recording": index, "excitation": joint.setups[index].excitation,
             "engine": independent._engine(), "significant": significant}
 

@@ -16,7 +16,9 @@ import time
 
 from threadpoolctl import threadpool_limits
 
-from hdjoint.diagnosis.engine import Diagnosis
+from hdjoint.diagnosis.calibrate import calibrate, calibration_table
+from hdjoint.diagnosis.objective import Objective
+from hdjoint.diagnosis.prepare import prepare
 from hdjoint_truth import cases as tc
 from hdjoint_truth.simulate import simulate
 from results import ResultsPage
@@ -28,18 +30,18 @@ VARIANTS = {
 }
 
 
-def calibrated(joint) -> tuple[dict, Diagnosis]:
+def calibrated(joint) -> tuple[dict, Objective, object]:
     with threadpool_limits(limits=1, user_api="blas"):
-        diag = Diagnosis(simulate(joint.truth, joint.form, joint.setups[0], joint.nominal), joint.nominal, workers=1)
-        p, diag.last_fit = diag.calibrate()
-    return p, diag
+        result = calibrate(prepare(simulate(joint.truth, joint.form, joint.setups[0], joint.nominal), joint.nominal,
+                                   workers=1))
+    return result.params, result.objective, result.fit
 
 
-def row(seed: int, variant: str, joint, p: dict, diag: Diagnosis, seconds: float) -> str:
+def row(seed: int, variant: str, joint, p: dict, diag: Objective, fit, seconds: float) -> str:
     def cell(name):
         off = (p[name] - joint.truth[name]) / diag.priors[name].std
         return f"{p[name] / joint.nominal[name]:.2f}x (truth {joint.truth[name] / joint.nominal[name]:.2f}x, {off:+.1f})"
-    others = [f"{n} {c.z:+.1f}" for n, c in diag.calibration_of(diag.last_fit, p).items()
+    others = [f"{n} {c.z:+.1f}" for n, c in calibration_table(diag, fit, p).items()
               if n not in ("Jm", "Kt") and c.beyond_tolerance]
     return (f"| {seed} | {variant} | {joint.form.friction} | {cell('Jm')} | {cell('Kt')} | "
             f"{', '.join(others) or '-'} | {seconds:.0f} |")
@@ -63,8 +65,8 @@ def main():
                 continue  # already the drawn truth
             change(joint)
             start = time.perf_counter()
-            p, diag = calibrated(joint)
-            page.say(row(seed, variant, joint, p, diag, time.perf_counter() - start))
+            p, diag, fit = calibrated(joint)
+            page.say(row(seed, variant, joint, p, diag, fit, time.perf_counter() - start))
     page.write()
 
 

@@ -4,7 +4,7 @@ alarms and its power, on the independent truth (docs/benchmarks.md) with the
 torque sensor's column dropped.
 
 Each recording is calibrated as the diagnosis calibrates it, then the
-kinematic error is tested alone (Diagnosis.test_alone: its raw p, with no
+kinematic error is tested alone (HypothesisSearch.test_alone: its raw p, with no
 other hypothesis to share a Benjamini-Hochberg correction with, so a false
 alarm here is at least as likely as in a whole diagnosis).
   - controls (nothing missing, seeds 0-3, both recordings of each: 40 runs):
@@ -21,11 +21,12 @@ from __future__ import annotations
 import argparse
 import time
 from dataclasses import replace
-from pathlib import Path
 
 from threadpoolctl import threadpool_limits
 
-from hdjoint.diagnosis.engine import Diagnosis
+from hdjoint.diagnosis.calibrate import calibrate
+from hdjoint.diagnosis.prepare import prepare
+from hdjoint.diagnosis.search import HypothesisSearch
 from hdjoint.diagnosis.effects import EFFECTS
 from hdjoint_truth.cases import CONTROL_CASES, EFFECT_CASES, draw, record
 
@@ -43,9 +44,9 @@ def run(job: tuple[str, int, int]) -> dict:
     rec = replace(record(joint, index), tau_sensor=None)
     started = time.perf_counter()
     with threadpool_limits(limits=1, user_api="blas"):
-        diag = Diagnosis(rec, joint.nominal, None, None, 1)
-        p, _ = diag.calibrate()
-        h = diag.test_alone(EFFECTS["kinematic_error"], p)
+        calibrated = calibrate(prepare(rec, joint.nominal, workers=1))
+        diag = HypothesisSearch(calibrated.objective, calibrated.current_alignment)
+        h = diag.test_alone(EFFECTS["kinematic_error"], calibrated.params)
     row = {"case": name, "present": list(case.present), "seed": seed, "recording": index,
            "excitation": joint.setups[index].excitation, "engine": independent._engine(),
            "seconds": round(time.perf_counter() - started, 1), "accepted": bool(h and h.accepted())}

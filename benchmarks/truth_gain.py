@@ -16,7 +16,9 @@ import dataclasses
 
 import numpy as np
 
-from hdjoint.diagnosis.engine import Diagnosis
+from hdjoint.diagnosis.calibrate import calibrate, calibration_table
+from hdjoint.diagnosis.prepare import prepare
+from hdjoint.diagnosis.search import HypothesisSearch
 from hdjoint.diagnosis.effects import EFFECTS
 from hdjoint.diagnosis.structure import held_out_gain_sq
 from hdjoint_truth import cases as tc
@@ -42,21 +44,22 @@ def main():
     args = ap.parse_args()
     case = next(c for c in tc.EFFECT_CASES if args.case in c.name)
     joint = tc.draw(case, args.seed)
-    diag = Diagnosis(tc.record(joint, 0), joint.nominal, workers=1)
-    p, diag.last_fit = diag.calibrate()
-    diag._noise = diag._null_noise(p)
+    calibrated = calibrate(prepare(tc.record(joint, 0), joint.nominal, workers=1))
+    p, diag = calibrated.params, calibrated.objective
+    search = HypothesisSearch(diag, calibrated.current_alignment)
+    search.start_round(p)
     values = truth_values(args.effect, joint)
     effect = dataclasses.replace(EFFECTS[args.effect], starts=(values,))
-    h = diag._try(effect, p)
+    h = search.try_effect(effect, p)
     print(f"{case.name}, seed {args.seed} ({joint.description['excitations'][0]}, {joint.description['friction']} "
           f"friction), {args.effect} at the truth's {values}")
     print(f"  fitted from the truth: held-out gain {h.gain.gain:.3f}, z {h.gain.z:.2f}, p {h.p_raw:.2g}, "
           f"delta BIC {h.delta_bic:.0f}; " + ", ".join(f"{n} = {h.params_after[n]:.3g}" for n in h.fitted))
     channels = diag.channels_of(effect.part)
-    held = diag.fit(dict(p, **values), diag._anchors(effect.part, effect.stateful), channels)
+    held = diag.fit(dict(p, **values), diag.anchors(effect.part, effect.stateful), channels)
     g = held_out_gain_sq(diag.squared(p, channels), diag.squared(held.params, channels), diag.fold, diag.test)
     print(f"  held at the truth: held-out gain {g.gain:.3f}, z {g.z:.2f}, folds better {np.mean(g.fold_gains > 0):.2f}")
-    moved = {n: round(float(c.z), 1) for n, c in diag.calibration_of(diag.last_fit, p).items() if abs(c.z) > 3}
+    moved = {n: round(float(c.z), 1) for n, c in calibration_table(diag, calibrated.fit, p).items() if abs(c.z) > 3}
     print(f"  calibrated beyond three tolerances: {moved or 'none'}")
 
 

@@ -56,7 +56,7 @@ def test_without_a_torque_sensor_the_limit_is_judged_on_the_torsion():
     rec = dataclasses.replace(record(joint, 0), tau_sensor=None)
     result, doc = diagnose(rec, joint.nominal)
     assert doc["verdict"] == "consistent", doc["findings"]
-    limit = smallest_shown(result.engine, EFFECTS["kinematic_error"], result.params)
+    limit = smallest_shown(result.search, EFFECTS["kinematic_error"], result.params)
     assert limit.at == ("theta_l", 2.0) and limit.limit is not None
 
     joint.form.extra_kinematic = [("l", 2.0, 2.0 * limit.limit, 0.0)]

@@ -3,13 +3,13 @@ import numpy as np
 import pytest
 
 from hdjoint.fmu.concealed_effects import CASES, nominal_for, record
-from hdjoint.diagnosis.engine import Diagnosis
+from hdjoint.diagnosis.prepare import prepare
 
 
 @pytest.fixture(scope="module")
 def diag():
     case = CASES[0]
-    return Diagnosis(record(case, duration=4.0), nominal_for(case))
+    return prepare(record(case, duration=4.0), nominal_for(case))
 
 
 @pytest.mark.parametrize("extra", [{}, {"hys_H": 0.2, "hys_sigma": 2e4}, {"i_delay": 2e-3}])
@@ -115,7 +115,7 @@ def test_the_damping_torque_of_a_fast_torsion_ripple_leaves_no_transmission_resi
     i_m = np.zeros_like(t)
     elastic = _core.compliance(parameters.for_estimator(p), i_m, theta_m, theta_l)["tau_compliance"]
     rec = Recording(time=t, i_m=i_m, theta_m=theta_m, theta_l=theta_l, tau_sensor=elastic + p["Df"] * rate)
-    diag = Diagnosis(rec, p)
+    diag = prepare(rec, p)
     channel = next(c for c in diag.channels if c.name == "transmission")
     residual = diag.eval.residual(channel, p)[diag.used]
     ripple = p["Df"] * 2e-6 * 360.0 / np.sqrt(2)  # RMS of the ripple's damping torque, N.m

@@ -4,7 +4,7 @@ across the jump to the next), and are the diagnosis' folds."""
 import numpy as np
 import pytest
 
-from hdjoint.diagnosis import engine
+from hdjoint.diagnosis import prepare as preparing
 from hdjoint.diagnosis.pipeline import diagnose
 from hdjoint.diagnosis.rules import FOLDS
 from hdjoint.io import parameters
@@ -51,9 +51,9 @@ def test_each_window_is_filtered_and_simulated_on_its_own(long_rec):
 
 def test_a_long_recording_is_diagnosed_in_windows(long_rec, monkeypatch):
     case, rec = long_rec
-    monkeypatch.setattr(engine, "ANALYSED_SECONDS", 8.0)
+    monkeypatch.setattr(preparing, "ANALYSED_SECONDS", 8.0)
     result, doc = diagnose(rec, nominal_for(case))
-    diag = result.engine
+    diag = result.objective
     assert len(diag.rec) < 0.4 * len(rec)
     assert doc["recording"]["samples"] == len(rec) and doc["recording"]["analysed_samples"] == len(diag.rec)
     # The windows are the folds: each one wholly fitted or wholly held out.

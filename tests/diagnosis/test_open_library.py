@@ -5,7 +5,8 @@ import pytest
 
 from hdjoint.io import parameters
 from hdjoint.diagnosis.current_alignment import align_current
-from hdjoint.diagnosis.engine import Diagnosis
+from hdjoint.diagnosis.objective import Objective
+from hdjoint.diagnosis.prepare import prepare
 from hdjoint.diagnosis.open_library import propose_terms
 from hdjoint_truth.physics import Form
 from hdjoint_truth.simulate import Setup, simulate
@@ -14,13 +15,13 @@ NOMINAL = dict(parameters.defaults(), wg_load=1.0)
 EVERY_CHANNEL = [{"channel": name} for name in ("transmission", "motor", "link")]
 
 
-def diagnosis_of(form: Form) -> Diagnosis:
+def diagnosis_of(form: Form) -> Objective:
     """A short recording of the independent truth with `form`, otherwise the
     nominal joint, its current aligned with the encoders as calibration does
     before any term is proposed (the truth's drive holds its current over a
     sample: unaligned, that reads as N*Kt/2*(i_m[t-1] - i_m))."""
     rec = simulate(dict(NOMINAL, Df=4.0), form, Setup(excitation="multisine", duration=8.0, seed=3), NOMINAL)
-    diag = Diagnosis(rec, NOMINAL)
+    diag = Objective(prepare(rec, NOMINAL))
     align_current(diag, NOMINAL)
     return diag
 

@@ -17,7 +17,7 @@ def test_an_estimator_that_cannot_run_the_corrected_set_is_said_in_the_report():
     result, doc = diagnose(record(case, duration=8.0), nominal_for(case))
     # Stiffer than any torsion of the run allows: eq. (5)'s atan is singular, the C++ estimator refuses it.
     singular = dict(doc["params"], Cf=0.5, Kf=5e5)
-    doc["estimator"] = estimator_comparison(result.engine, singular)
+    doc["estimator"] = estimator_comparison(result.objective, singular)
     assert "singular torsion" in doc["estimator"]["corrected"]["error"]
     page = report.build(result, doc)
     assert "The estimator did not run with the corrected parameters: row " in page

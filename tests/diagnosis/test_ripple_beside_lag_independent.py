@@ -7,7 +7,9 @@ and cogging's own test accepts it."""
 import pytest
 from threadpoolctl import threadpool_limits
 
-from hdjoint.diagnosis.engine import Diagnosis
+from hdjoint.diagnosis.calibrate import calibrate
+from hdjoint.diagnosis.prepare import prepare
+from hdjoint.diagnosis.search import HypothesisSearch
 from hdjoint.diagnosis.effects import EFFECTS
 from hdjoint_truth.cases import EFFECT_CASES, draw, record
 
@@ -19,10 +21,10 @@ def test_cogging_under_a_lags_broadband_residual_is_found_and_accepted():
     joint = draw(case, 2, 30.0)
     assert joint.setups[0].current_sensor.lag > 2e-3 and joint.truth["cog_order"] == 8.0
     with threadpool_limits(limits=1, user_api="blas"):
-        diag = Diagnosis(record(joint, 0), joint.nominal, None, None, 1)
-        p, _ = diag.calibrate()
-        found = diag.order_search(p, "motor", diag.channels_of("motor"), ("theta_m",))
+        calibrated = calibrate(prepare(record(joint, 0), joint.nominal, workers=1))
+        p, search = calibrated.params, HypothesisSearch(calibrated.objective, calibrated.current_alignment)
+        found = search.order_search(p, "motor", search.objective.channels_of("motor"), ("theta_m",)).found
         assert [o.order for o in found][:1] == [8.0]
         assert found[0].prominence < 3.0 and found[0].gain.gain > 0.3  # kept by its share, not its prominence
-        h = diag.test_alone(EFFECTS["cogging"], p)
+        h = search.test_alone(EFFECTS["cogging"], p)
     assert h is not None and h.accepted() and h.params_after["cog_order"] == 8.0

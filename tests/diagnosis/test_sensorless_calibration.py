@@ -7,7 +7,7 @@ on control sweep s0 Kf came out at 0.25 times the truth's (an interval that
 excluded it) and eq. (7)'s bl1 31 tolerances off, carrying the gravity
 torque. Smoothed alike, the link channel's fixed noise still pulled the
 torque scale down (Kf 0.61, bl1 6.9 tolerances off): its noise now scales
-with Jl (Diagnosis.noise_scale). benchmarks/sensorless_controls.py measures
+with Jl (Objective.noise_scale). benchmarks/sensorless_controls.py measures
 the whole diagnosis."""
 from dataclasses import replace
 
@@ -16,7 +16,9 @@ import pytest
 from threadpoolctl import threadpool_limits
 
 from hdjoint.diagnosis.channels import CURRENT_OFFSET_SHARE, channels_for
-from hdjoint.diagnosis.engine import Diagnosis
+from hdjoint.diagnosis.calibrate import calibrate
+from hdjoint.diagnosis.objective import Objective
+from hdjoint.diagnosis.prepare import prepare
 from hdjoint_truth.cases import CONTROL_CASES, draw, record
 
 pytestmark = pytest.mark.slow
@@ -26,8 +28,8 @@ def test_without_a_sensor_the_spring_is_not_traded_for_eq7():
     joint = draw(next(c for c in CONTROL_CASES if c.name == "control on sweep"), 0, 30.0)
     rec = replace(record(joint, 0), tau_sensor=None)
     with threadpool_limits(limits=1, user_api="blas"):
-        diag = Diagnosis(rec, joint.nominal, None, None, 1)
-        p, fit = diag.calibrate()
+        calibrated = calibrate(prepare(rec, joint.nominal, workers=1))
+        p, diag = calibrated.params, calibrated.objective
     assert all(c.smooths_part() for c in channels_for(False)) and not any(c.smooths_part() for c in channels_for(True))
     assert p["Kf"] > 0.8 * joint.truth["Kf"]  # 0.86 (0.61 at a fixed noise, 0.25 compared unsmoothed)
     assert 0.85 < p["Jl"] / joint.truth["Jl"] < 1.15  # 1.01 (0.66 at a fixed noise)
@@ -43,9 +45,9 @@ def test_the_link_channel_without_a_sensor_is_measured_in_its_own_scale():
     scale. With a sensor no channel scales."""
     joint = draw(next(c for c in CONTROL_CASES if c.name == "control on sweep"), 0, 30.0)
     rec = replace(record(joint, 0), tau_sensor=None)
-    diag = Diagnosis(rec, joint.nominal, None, None, 1)
+    diag = Objective(prepare(rec, joint.nominal, workers=1))
     p = diag.initial_offset(joint.nominal)
-    diag._update_noise(p)
+    diag = diag.with_noise(p)
     link = next(c for c in diag.channels if c.reference == "link")
     scaled = dict(p, **{n: 0.5 * p[n] for n in ("Kf", "Kw", "Jl", "Bl", "mgl", "Fl", "Df")})
     scaled.update({n: 2.0 * p[n] for n in ("Cf", "Cw")})
@@ -64,7 +66,7 @@ def test_a_current_offset_stays_in_the_motor_channel():
     0.006 A off) the motor channel kept 10 % of its held-out residual as
     structure against the torque level, and the verdict was `unexplained`.
     The motor's channel is now compared free of its mean
-    up to what a current sensor's offset can give (diagnosis.mean_allowance):
+    up to what a current sensor's offset can give (channels.mean_allowance):
     the structure is gone, and 0.01 A more of offset moves no parameter the
     link side sees."""
     from hdjoint.diagnosis.findings import remaining_structure
@@ -72,12 +74,12 @@ def test_a_current_offset_stays_in_the_motor_channel():
     rec = replace(record(joint, 0), tau_sensor=None)
     shifted = replace(rec, i_m=rec.i_m + 0.01)
     with threadpool_limits(limits=1, user_api="blas"):
-        diag = Diagnosis(rec, joint.nominal, None, None, 1)
-        p, _ = diag.calibrate()
+        calibrated = calibrate(prepare(rec, joint.nominal, workers=1))
+        p, diag = calibrated.params, calibrated.objective
         assert remaining_structure(diag, p) == []
         # The truth's offset and the added one lie within what the channel is freed of.
         assert abs(joint.setups[0].current_sensor.offset) + 0.01 < CURRENT_OFFSET_SHARE * diag.eval.largest_current
-        q, _ = Diagnosis(shifted, joint.nominal, None, None, 1).calibrate()
+        q = calibrate(prepare(shifted, joint.nominal, workers=1)).params
     for name in ("Kf", "Jl", "mgl", "bl1", "Kw"):
         assert q[name] == pytest.approx(p[name], abs=0.05 * diag.priors[name].std), name
     assert q["a0"] == pytest.approx(p["a0"], abs=2e-7)  # 0.01 A is 0.045 N.m, 4.5e-6 rad of torsion

@@ -4,7 +4,9 @@ the motor channel does not compare it."""
 import numpy as np
 import pytest
 
-from hdjoint.diagnosis.engine import Diagnosis
+from hdjoint.diagnosis.calibrate import calibrate
+from hdjoint.diagnosis.prepare import prepare
+from hdjoint.diagnosis.search import HypothesisSearch
 from hdjoint.diagnosis.motor_rest import motor_at_rest
 from hdjoint.io.recording import Recording
 from hdjoint.diagnosis.kinematics import kinematics
@@ -55,8 +57,8 @@ def test_a_lugre_sweep_control_calibrates_jm_and_kt_near_the_truth():
     nominal value (18.6 and -5.2 tolerances); the truth is 0.93x and 0.99x."""
     joint = draw(next(c for c in CONTROL_CASES if c.excitation == "sweep"), 2)
     assert joint.form.friction == "lugre"
-    diag = Diagnosis(record(joint, 0), joint.nominal, workers=1)
-    p, fit = diag.calibrate()
+    calibrated = calibrate(prepare(record(joint, 0), joint.nominal, workers=1))
+    p, diag = calibrated.params, calibrated.objective
     for name in ("Jm", "Kt"):
         off = (p[name] - joint.truth[name]) / diag.priors[name].std
         assert abs(off) < 2.0, (name, p[name] / joint.nominal[name], joint.truth[name] / joint.nominal[name])
@@ -72,8 +74,8 @@ def test_cogging_is_tested_and_accepted_on_the_sweep_with_dwells():
     from hdjoint_truth.cases import EFFECT_CASES
     joint = draw(next(c for c in EFFECT_CASES if c.name == "cogging"), 2)
     assert joint.setups[0].excitation == "sweep" and joint.truth["cog_order"] == 6.0
-    diag = Diagnosis(record(joint, 0), joint.nominal, workers=1)
-    p, diag.last_fit = diag.calibrate()
-    h = diag.test_alone(EFFECTS["cogging"], p)
+    calibrated = calibrate(prepare(record(joint, 0), joint.nominal, workers=1))
+    p = calibrated.params
+    h = HypothesisSearch(calibrated.objective, calibrated.current_alignment).test_alone(EFFECTS["cogging"], p)
     assert h is not None and [o.order for o in h.orders] == [6.0]
     assert h.accepted() and h.gain.folds_compared < 20

@@ -16,7 +16,9 @@ import pytest
 from threadpoolctl import threadpool_limits
 
 from hdjoint.diagnosis.channels import TORSION_VIEW
-from hdjoint.diagnosis.engine import Diagnosis
+from hdjoint.diagnosis.calibrate import calibrate
+from hdjoint.diagnosis.prepare import prepare
+from hdjoint.diagnosis.search import HypothesisSearch
 from hdjoint.diagnosis.effects import EFFECTS
 from hdjoint_truth.cases import EFFECT_CASES, draw, record
 
@@ -28,9 +30,9 @@ def test_a_transmitted_ripple_is_not_named_a_kinematic_error_from_the_torsion():
     joint = draw(case, 3, 30.0)
     rec = replace(record(joint, 0), tau_sensor=None)
     with threadpool_limits(limits=1, user_api="blas"):
-        diag = Diagnosis(rec, joint.nominal, None, None, 1)
-        p, _ = diag.calibrate()
-        h = diag.test_alone(EFFECTS["kinematic_error"], p)
+        calibrated = calibrate(prepare(rec, joint.nominal, workers=1))
+        search = HypothesisSearch(calibrated.objective, calibrated.current_alignment)
+        h = search.test_alone(EFFECTS["kinematic_error"], calibrated.params)
     assert h is not None and h.seen_on == TORSION_VIEW  # judged on the torsion, not the torque channels
     assert h.p_value <= 0.05 and h.gain.z > 3.0          # it passes there ...
     assert h.pooled_ratio > 1.0                   # ... but the torque channels get worse with it

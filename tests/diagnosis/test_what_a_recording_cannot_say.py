@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from hdjoint.diagnosis import effects
-from hdjoint.diagnosis.engine import Diagnosis
+from hdjoint.diagnosis.objective import Objective
+from hdjoint.diagnosis.prepare import prepare
 from hdjoint.diagnosis.effects import EFFECTS
 from hdjoint.diagnosis.effects.needs import FREQUENCY_FOLLOWS_TIME, frequency_time_correlation
 from hdjoint_truth.cases import CONTROL_CASES, draw, record
@@ -24,7 +25,7 @@ pytestmark = pytest.mark.slow  # each draws and simulates the truth's recordings
 def _prepared(case: str, seed: int, sensor: bool):
     joint = draw(next(c for c in CONTROL_CASES if c.name == case), seed, 30.0)
     rec = record(joint, 0) if sensor else replace(record(joint, 0), tau_sensor=None)
-    diag = Diagnosis(rec, joint.nominal, None, None, 1)
+    diag = Objective(prepare(rec, joint.nominal, workers=1))
     return diag, diag.reference_torque(diag.initial_offset(joint.nominal))
 
 

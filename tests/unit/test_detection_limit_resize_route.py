@@ -10,7 +10,8 @@ from hdjoint.diagnosis.detection_limit import _moved, resized
 from hdjoint.diagnosis.effects import EFFECTS
 
 KINEMATIC = EFFECTS["kinematic_error"]
-DIAG = SimpleNamespace(priors={"al1": Prior(1e-4, 1e-4), "Kf": Prior(1e4, 1e3)}, calibrated_names=["al1", "Kf"])
+DIAG = SimpleNamespace(objective=SimpleNamespace(priors={"al1": Prior(1e-4, 1e-4), "Kf": Prior(1e4, 1e3)},
+                                                calibrated_names=["al1", "Kf"]))
 
 
 def test_a_move_across_the_tolerance_shows_the_ripple():
@@ -29,10 +30,12 @@ def test_only_the_effects_own_terms_count_and_a_term_already_beyond_closes_the_r
 def test_which_effects_get_a_limit():
     from hdjoint.diagnosis.detection_limit import untold_effects
     effects = [EFFECTS[e] for e in ("kinematic_error", "backlash", "time_delay", "cogging", "hysteresis")]
-    diag = SimpleNamespace(**vars(DIAG), last_round=[], last_candidates=effects)
     within = {"al1": 1e-4, "ke_l1_a": 0.0, "ke_l1_b": 0.0}
+
+    def selection(p):
+        return SimpleNamespace(params=p, last_round=[], last_candidates=effects)
     # cogging and hysteresis have no Size (effects.py says why); a finding's effects (`told`) get none
-    assert [e.id for e in untold_effects(diag, within, {"time_delay"})] == ["kinematic_error", "backlash"]
+    assert [e.id for e in untold_effects(DIAG, selection(within), {"time_delay"})] == ["kinematic_error", "backlash"]
     # a ripple whose slot the set already uses, or whose eq. (7) term already moved, gets none
-    assert [e.id for e in untold_effects(diag, dict(within, ke_l1_a=1e-5))] == ["backlash", "time_delay"]
-    assert [e.id for e in untold_effects(diag, dict(within, al1=6e-4))] == ["backlash", "time_delay"]
+    assert [e.id for e in untold_effects(DIAG, selection(dict(within, ke_l1_a=1e-5)))] == ["backlash", "time_delay"]
+    assert [e.id for e in untold_effects(DIAG, selection(dict(within, al1=6e-4)))] == ["backlash", "time_delay"]

@@ -107,10 +107,10 @@ def test_the_checker_sees_an_import_inside_a_function(tmp_path):
     """The test itself: a lazy import back up a layer is found."""
     source = tmp_path / "hdjoint" / "io" / "sneaky.py"
     source.parent.mkdir(parents=True)
-    source.write_text("def f():\n    from hdjoint.diagnosis.engine import diagnose\n    from ..app import cli\n")
-    known = {"hdjoint.io.sneaky": source, "hdjoint.diagnosis.engine": source, "hdjoint.app.cli": source}
+    source.write_text("def f():\n    from hdjoint.diagnosis.pipeline import diagnose\n    from ..app import cli\n")
+    known = {"hdjoint.io.sneaky": source, "hdjoint.diagnosis.pipeline": source, "hdjoint.app.cli": source}
     found = imports_of("hdjoint.io.sneaky", source, known)
-    assert found == {"hdjoint.diagnosis.engine", "hdjoint.app.cli"}
+    assert found == {"hdjoint.diagnosis.pipeline", "hdjoint.app.cli"}
     assert all(_layer(t) > _layer("hdjoint.io.sneaky") for t in found)
 
 

@@ -46,7 +46,7 @@ class _StubPlanting:
         planting = object.__new__(_Planting)
         effect = EFFECTS["stribeck_friction"]  # stationary: judged by the fold z against the null
         reference = reference_set(effect, defaults())
-        planting.diag = SimpleNamespace(fold=FOLD, test=TEST)
+        planting.search = SimpleNamespace(objective=SimpleNamespace(fold=FOLD, test=TEST))
         planting.effect, planting.p, planting.at = effect, reference, None
         planting.reference, planting.anchor_jacobian = reference, None
         planting.base = base[None, :]

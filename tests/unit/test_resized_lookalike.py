@@ -1,6 +1,6 @@
 """A resized finding is reported as one of a look-alike set when a look-alike
 the model lacks explains at least as much held-out structure of the same
-part (Diagnosis._resize_or_lookalike): calibration fits the resize first,
+part (resize._resize_or_lookalike): calibration fits the resize first,
 so it takes what it can of the look-alike's structure (backlash s0 of the
 independent truth: `Cw` resized at 11.6 % held out, the backlash hypothesis
 18 % on top of it in too few folds to be accepted)."""
@@ -9,7 +9,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from hdjoint.diagnosis.calibration import Calibrated, Prior
-from hdjoint.diagnosis.engine import Diagnosis
+from hdjoint.diagnosis.resize import _resize_or_lookalike
 from hdjoint.diagnosis.hypotheses import Finding, Hypothesis
 from hdjoint.diagnosis.effects import EFFECTS
 from hdjoint.diagnosis.structure import HeldOutGain
@@ -30,7 +30,7 @@ def _resized(gain):
 
 
 def _decide(finding, last_round):
-    return Diagnosis._resize_or_lookalike(SimpleNamespace(last_round=last_round), finding)
+    return _resize_or_lookalike(SimpleNamespace(last_round=last_round), finding)
 
 
 def test_a_lookalike_that_explains_more_makes_the_resize_one_of_two():

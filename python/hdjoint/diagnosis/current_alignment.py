@@ -53,7 +53,7 @@ def align_current(diag, p: dict) -> dict | None:
 
     def residual(shift):
         diag.prep.current_shift = shift
-        return diag._normalised(p, channels, diag.fit_index)
+        return diag.normalised(p, channels, diag.fit_index)
 
     estimate, curvature = fit_shift(residual, step)
     diag.prep.current_shift = estimate

@@ -165,16 +165,16 @@ def planted_gains(base: np.ndarray, left: np.ndarray, fold: np.ndarray, test: np
 class _Planting:
     """One effect planted into the corrected set `p` of a diagnosis at any size."""
 
-    def __init__(self, diag, effect: Effect, p: dict, shared: dict):
+    def __init__(self, search, effect: Effect, p: dict, shared: dict):
         """`shared`: what every effect's planting on this set reads (the null's noise, the anchors' Jacobians)."""
-        self.diag, self.effect, self.p = diag, effect, p
-        self.channels = diag.channels_of(effect.part)
+        self.search, self.effect, self.p = search, effect, p
+        self.channels = search.objective.channels_of(effect.part)
         self.base = self._residuals(p)
-        anchors = diag._anchors(effect.part, effect.stateful) + _orders_calibrated(diag, effect)
+        anchors = search.objective.anchors(effect.part, effect.stateful) + _orders_calibrated(search, effect)
         self.anchors = anchors
         key = (effect.part, tuple(anchors))
         if key not in shared:
-            shared[key] = diag._jacobian(p, anchors, self.channels) if anchors else None
+            shared[key] = search.objective.jacobian(p, anchors, self.channels) if anchors else None
         self.anchor_jacobian = shared[key]
         self.reference = reference_set(effect, p)
         # The null: the effect's own parameters and the anchors, linearised at the reference size.
@@ -182,39 +182,39 @@ class _Planting:
         self.at = _planted_at(effect, self.reference)
         own = list(effect.params) + ([f"{slot[0]}_a", f"{slot[0]}_b"] if slot else [])
         names = list(dict.fromkeys(own + anchors))
-        jacobian = diag._jacobian(self.reference, names, self.channels)
-        rows = [diag.channels.index(c) for c in self.channels]
+        jacobian = search.objective.jacobian(self.reference, names, self.channels)
+        rows = [search.objective.channels.index(c) for c in self.channels]
         if "noise" not in shared:
-            shared["noise"] = diag.null_noise_at(p)
+            shared["noise"] = search.null_noise_at(p)
         noise = shared["noise"].replicates(rows)
         if effect.uneven_over_folds:
-            self.null = null_gain(noise, jacobian, diag.fit_index, diag.fold, diag.test)
+            self.null = null_gain(noise, jacobian, search.objective.fit_index, search.objective.fold, search.objective.test)
         else:
-            self.null = null_z(noise, jacobian, diag.fit_index, diag.fold, diag.test)
+            self.null = null_z(noise, jacobian, search.objective.fit_index, search.objective.fold, search.objective.test)
 
     def _residuals(self, q: dict) -> np.ndarray:
-        d = self.diag
-        return np.stack([np.where(d.used, np.nan_to_num(d.normalised_residual(c, q)), 0.0)
+        d = self.search
+        return np.stack([np.where(d.objective.used, np.nan_to_num(d.objective.normalised_residual(c, q)), 0.0)
                          for c in self.channels])
 
     def _calibrated(self, signature: np.ndarray) -> tuple[np.ndarray, dict]:
         """What calibration would leave of the signature, and the moves of the anchors that take the rest."""
         if self.anchor_jacobian is None:
             return signature, {}
-        rows = self.diag.fit_index
+        rows = self.search.objective.fit_index
         j = self.anchor_jacobian
         coef = np.linalg.lstsq(j[:, rows, :].reshape(-1, j.shape[2]), signature[:, rows].ravel(), rcond=None)[0]
         # The residual base + signature + J @ move is least with move = -coef.
         return signature - np.einsum("csk,k->cs", j, coef), dict(zip(self.anchors, -coef))
 
     def shown(self, factor: float) -> bool:
-        d = self.diag
+        d = self.search
         # What the effect adds to the residual of a model that lacks it.
         signature = self.base - self._residuals(at_size(self.effect, self.reference, factor))
         left, moves = self._calibrated(signature)
         if self.at is not None and resized(d, self.effect, self.p, moves):
             return True
-        combined, alone = planted_gains(self.base, left, d.fold, d.test)
+        combined, alone = planted_gains(self.base, left, d.objective.fold, d.objective.test)
         shown = alone.gain > MIN_GAIN and self._passes(combined)
         return shown and (self.at is None or self._order_found(left))
 
@@ -233,17 +233,13 @@ class _Planting:
         unfound: over a fraction of a period the search reads slow structure
         along the angle, beside a polynomial trend, and only when it is most
         of the residual."""
-        d, angle = self.diag, self.at[0]
-        added = {c.name: left[i] * d.noise_scale(c, self.p) for i, c in enumerate(self.channels)}
-        seen = d._orders_seen  # what the search notes is the round's, not this planting's
-        try:
-            found = d.order_search(self.p, self.effect.part, self.channels, (angle,), added=added)
-        finally:
-            d._orders_seen = seen
+        d, angle = self.search, self.at[0]
+        added = {c.name: left[i] * d.objective.noise_scale(c, self.p) for i, c in enumerate(self.channels)}
+        found = d.order_search(self.p, self.effect.part, self.channels, (angle,), added=added).found
         return any(o.angle == angle for o in found)
 
 
-def _moved(diag, effect: Effect, p: dict) -> bool:
+def _moved(search, effect: Effect, p: dict) -> bool:
     """Calibration took one of the effect's terms beyond its tolerance. The
     route by which a resized term shows the effect is then closed, and what
     the term took cannot be told from the ripple: no limit is claimed. Where
@@ -252,54 +248,54 @@ def _moved(diag, effect: Effect, p: dict) -> bool:
     without a torque sensor on the independent truth's multisine bl1 went to
     -18 tolerances, and a limit beside that said that a ripple of 1 arcmin
     would not show."""
-    return any(_tolerances(diag, n, p[n]) > RESIZE_Z
-               for n in effect.resizes if n in diag.priors and n in diag.calibrated_names)
+    return any(_tolerances(search, n, p[n]) > RESIZE_Z
+               for n in effect.resizes if n in search.objective.priors and n in search.objective.calibrated_names)
 
 
-def _tolerances(diag, name: str, value: float) -> float:
+def _tolerances(search, name: str, value: float) -> float:
     """How many tolerances `value` lies from the parameter's prior centre."""
-    return abs(value - diag.priors[name].centre) / diag.priors[name].std
+    return abs(value - search.objective.priors[name].centre) / search.objective.priors[name].std
 
 
-def resized(diag, effect: Effect, p: dict, moves: dict) -> bool:
+def resized(search, effect: Effect, p: dict, moves: dict) -> bool:
     """Calibration's moves would take one of the effect's own terms (eq. (7)
     for the kinematic error), within its tolerance in `p`, beyond it: the
     diagnosis then reports it (a resized finding, or unexplained structure
     when the travel does not resolve that harmonic), so the effect shows."""
-    return any(_tolerances(diag, n, p[n]) <= RESIZE_Z < _tolerances(diag, n, p[n] + m)
-               for n, m in moves.items() if n in effect.resizes and n in diag.priors)
+    return any(_tolerances(search, n, p[n]) <= RESIZE_Z < _tolerances(search, n, p[n] + m)
+               for n, m in moves.items() if n in effect.resizes and n in search.objective.priors)
 
 
-def _orders_calibrated(diag, effect: Effect) -> list[str]:
+def _orders_calibrated(search, effect: Effect) -> list[str]:
     """An effect at angle orders: the calibrated terms of the orders the model
     has (eq. (7)), which calibration refits beside it. Every other effect
-    leaves them out as orthogonal (Diagnosis._anchors); to a ripple at
+    leaves them out as orthogonal (Objective.anchors); to a ripple at
     another order of the same angle over a short travel they are not."""
-    return [n for n in diag.calibrated_names if n in effect.resizes] if effect.order_angles else []
+    return [n for n in search.objective.calibrated_names if n in effect.resizes] if effect.order_angles else []
 
 
 class _TorsionPlanting:
     """A ripple planted at one angle order of a recording without a torque
-    sensor, judged on the encoders' torsion (Diagnosis._try_on_torsion)."""
+    sensor, judged on the encoders' torsion (HypothesisSearch.try_on_torsion)."""
 
-    def __init__(self, diag, effect: Effect, p: dict):
-        self.diag, self.effect, self.p = diag, effect, p
+    def __init__(self, search, effect: Effect, p: dict):
+        self.search, self.effect, self.p = search, effect, p
         self.reference = reference_set(effect, p)
         self.at = _planted_at(effect, self.reference)
-        self.base = torsion_less_kinematic(diag.prep, p)
-        self.nuisance = torsion_nuisances(diag.torsion_torque(p), diag.rec.theta_l)
+        self.base = torsion_less_kinematic(search.objective.prep, p)
+        self.nuisance = torsion_nuisances(search.torsion_torque(p), search.objective.rec.theta_l)
         # The torsion's columns of eq. (7)'s calibrated terms (linear in them): what calibration would take.
         # base + signature - columns @ move is least with move = the signature's fit by the columns.
-        self.names, step = _orders_calibrated(diag, effect), 1e-4
-        columns = [(self.base - torsion_less_kinematic(diag.prep, dict(p, **{n: p[n] + step}))) / step
+        self.names, step = _orders_calibrated(search, effect), 1e-4
+        columns = [(self.base - torsion_less_kinematic(search.objective.prep, dict(p, **{n: p[n] + step}))) / step
                    for n in self.names]
         self.columns = np.column_stack(columns) if columns else None
-        self.fit_rows = diag.train & np.isfinite(self.base)
+        self.fit_rows = search.objective.train & np.isfinite(self.base)
 
     def shown(self, factor: float) -> bool:
-        d = self.diag
+        d = self.search
         # The ripple the model lacks: the torsion a model with it would leave less.
-        signature = self.base - torsion_less_kinematic(d.prep, at_size(self.effect, self.reference, factor))
+        signature = self.base - torsion_less_kinematic(d.objective.prep, at_size(self.effect, self.reference, factor))
         if self.columns is not None:
             rows = self.fit_rows
             coef = np.linalg.lstsq(self.columns[rows], signature[rows], rcond=None)[0]
@@ -310,13 +306,13 @@ class _TorsionPlanting:
         return bool(passing)  # an order of its angle: the effect is tested there
 
 
-def smallest_shown(diag, effect: Effect, p: dict, shared: dict | None = None) -> Limit:
+def smallest_shown(search, effect: Effect, p: dict, shared: dict | None = None) -> Limit:
     """Down from the reference size while it shows, else up until it does;
     then the step refined between the last size not shown and the first shown."""
-    if effect.seen_on_torsion and not diag.has_sensor:
-        planting = _TorsionPlanting(diag, effect, p)
+    if effect.seen_on_torsion and not search.objective.has_sensor:
+        planting = _TorsionPlanting(search, effect, p)
     else:
-        planting = _Planting(diag, effect, p, {} if shared is None else shared)
+        planting = _Planting(search, effect, p, {} if shared is None else shared)
     at = planting.at
     name = effect.size.parameter
     ref = planting.reference[name]
@@ -342,19 +338,21 @@ def smallest_shown(diag, effect: Effect, p: dict, shared: dict | None = None) ->
                  effect.size.source, at, shape)
 
 
-def untold_effects(diag, p: dict, told: set[str] = frozenset()) -> list[Effect]:
+def untold_effects(search, selection, told: set[str] = frozenset()) -> list[Effect]:
     """The effects detection_limits measures (see there)."""
-    accepted = {h.effect.id for h in diag.last_round if h.accepted()} | set(told)
-    return [e for e in diag.last_candidates if e.id not in accepted and e.size is not None
-            and not (planted_slot(e) and (slot_on(p, planted_slot(e)[0]) or _moved(diag, e, p)))]
+    p = selection.params
+    accepted = {h.effect.id for h in selection.last_round if h.accepted()} | set(told)
+    return [e for e in selection.last_candidates if e.id not in accepted and e.size is not None
+            and not (planted_slot(e) and (slot_on(p, planted_slot(e)[0]) or _moved(search, e, p)))]
 
 
-def detection_limits(diag, p: dict, told: set[str] = frozenset()) -> list[Limit]:
+def detection_limits(search, selection, told: set[str] = frozenset()) -> list[Limit]:
     """The limit of each effect the last round tested and did not accept (an
     effect at angle orders also when its search found no order), nor named
     in a finding (`told`: a resized one, a look-alike); an effect at angle
     orders not when its slot is in use or its terms moved (_moved). The
     effects side by side in forked processes (forked.py: the same limits)."""
-    effects = untold_effects(diag, p, told)
+    p = selection.params
+    effects = untold_effects(search, selection, told)
     shared: dict = {}  # in one process, the effects of a part share the anchors' Jacobian
-    return map_forked(lambda i: smallest_shown(diag, effects[i], p, shared), len(effects), diag.workers)
+    return map_forked(lambda i: smallest_shown(search, effects[i], p, shared), len(effects), search.objective.workers)

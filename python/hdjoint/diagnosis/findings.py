@@ -206,7 +206,7 @@ def _hypothesis_alternative(h, share: float) -> dict:
 
 
 def finding_document(result, f) -> dict:
-    diag, final_params = result.engine, result.params
+    diag, final_params = result.objective, result.params
     out = {"effect": f.effect.id, "kind": f.kind, "p_value": f.p_value, "confidence": f.confidence,
            "where": where(diag, f), "model": f.effect.model, "fit": fit_figures(diag, f)}
     if f.resized:
@@ -242,7 +242,7 @@ def finding_document(result, f) -> dict:
     if h.seen_on:
         out["evidence"]["seen_on"] = h.seen_on
     out["parameters"] = {n: final_params[n] for n in _reported(f.fitted)}
-    out["intervals"] = h.intervals or {n: _interval(diag.last_fit.std, final_params, n) for n in f.fitted}
+    out["intervals"] = h.intervals or {n: _interval(result.last_fit.std, final_params, n) for n in f.fitted}
     in_estimator = f.effect.in_the_estimator(diag, final_params)
     if in_estimator:
         out["in_the_estimator"] = in_estimator
@@ -255,7 +255,7 @@ def finding_document(result, f) -> dict:
 
 
 def document(result) -> dict:
-    diag = result.engine
+    diag = result.objective
     if result.findings:
         verdict = "missing_physics"
     else:
@@ -278,7 +278,7 @@ def document(result) -> dict:
         "noise": {c: round(s, 6) for c, s in result.sigma.items()},
         "estimator": estimator_comparison(diag, result.params),
         "recording": dict(recordings[0], torque_sensor=diag.has_sensor, analysed_samples=len(diag.rec),
-                          current_alignment=diag.current_alignment),
+                          current_alignment=result.current_alignment),
     }
     if len(recordings) > 1:
         doc["recordings"] = recordings

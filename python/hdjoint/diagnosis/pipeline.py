@@ -1,52 +1,66 @@
-"""The diagnosis from a recording to its findings document, stage by stage:
-calibrate, locate, select effects, resize, measure detection limits,
-document, and propose terms for what no effect explains."""
+"""The diagnosis from recordings to its findings document, stage by stage,
+each taking the results of those before it:
+
+  prepare    the recordings checked and joined, folds, fit sample, channels (prepare.py)
+  calibrate  the nominal model's parameters, MAP with tolerance priors, and the noise (calibrate.py, objective.py)
+  locate     structure in the calibrated residuals (findings.remaining_structure)
+  select     forward selection over the effects the recording can test (select.py, search.py)
+  resize     parameters the nominal model has, needed beyond their tolerance (resize.py)
+  limits     the smallest size of each untold effect the recording would show (detection_limit.py)
+  document   findings.json (findings.py), with terms proposed for what no effect explains (open_library.py)
+"""
 from __future__ import annotations
 
-import time as _time
+import time
 from typing import Callable
 
 from threadpoolctl import threadpool_limits
 
+from hdjoint.diagnosis.calibrate import calibrate, calibration_table
 from hdjoint.diagnosis.detection_limit import detection_limits
-from hdjoint.diagnosis.engine import Diagnosis
-from hdjoint.diagnosis.results import DiagnosisResult
 from hdjoint.diagnosis.findings import document, remaining_structure
 from hdjoint.diagnosis.open_library import propose_terms
+from hdjoint.diagnosis.prepare import prepare
+from hdjoint.diagnosis.resize import resized
+from hdjoint.diagnosis.results import DiagnosisResult
+from hdjoint.diagnosis.search import HypothesisSearch
+from hdjoint.diagnosis.select import select, unconfirmed_structure
 from hdjoint.io.recording import Recording
 
 
 def diagnose(rec: Recording | list[Recording], nominal: dict[str, float],
              progress: Callable[[str], None] | None = None, tolerance: dict[str, float] | None = None,
              workers: int | None = None):
-    """Run every step on one recording or several of the same joint (fitted
+    """Run every stage on one recording or several of the same joint (fitted
     jointly); returns (the DiagnosisResult, the findings document). The
     hypotheses of each round are fitted by `workers` processes (None: one
     per core; 1: in this process), with the same results."""
     # The linear algebra here is tall and thin (thousands of samples by a
-    # dozen parameters): one BLAS thread is faster than several fighting
-    # over two cores, by up to 7x measured on this machine under load.
+    # dozen parameters): one BLAS thread is faster than several fighting over two cores.
     with threadpool_limits(limits=1, user_api="blas"):
         return _diagnose(rec, nominal, progress, tolerance, workers)
 
 
 def _diagnose(rec, nominal, progress, tolerance, workers):
-    diag = Diagnosis(rec, nominal, progress, tolerance, workers)
-    calibrated, diag.last_fit = diag.calibrate()
-    diag.say("locating structure in the calibrated model's residuals")
-    located = remaining_structure(diag, calibrated)
-    p, added = diag.select(calibrated)
-    calibration = diag.calibration_of(diag.last_fit, p)
-    diag.say("checking what remains")
-    resized, unattributed = diag.resized(calibration, p)
-    diag.say("measuring the smallest size of each untold effect this recording would show")
-    limits = detection_limits(diag, p, {e for f in added + resized for e in f.named()})
-    result = DiagnosisResult(diag, dict(diag.nominal), dict(calibrated), p, added + resized,
-                             calibration, diag.tested, diag.not_testable, dict(diag.sigma), located,
-                             remaining_structure(diag, p) + diag.unconfirmed_structure() + unattributed,
-                             diag.orders_not_found, limits)
+    setup = prepare(rec, nominal, tolerance, progress, workers)
+    calibrated = calibrate(setup)
+    objective = calibrated.objective
+    setup.say("locating structure in the calibrated model's residuals")
+    located = remaining_structure(objective, calibrated.params)
+    search = HypothesisSearch(objective, calibrated.current_alignment)
+    selection = select(search, calibrated)
+    p = selection.params
+    calibration = calibration_table(objective, selection.last_fit, p)
+    setup.say("checking what remains")
+    resized_findings, unattributed = resized(objective, selection, calibration)
+    setup.say("measuring the smallest size of each untold effect this recording would show")
+    limits = detection_limits(search, selection, {e for f in selection.findings + resized_findings
+                                                  for e in f.named()})
+    result = DiagnosisResult(objective, calibrated, selection, search, selection.findings + resized_findings, calibration,
+                             located, remaining_structure(objective, p) + unconfirmed_structure(selection, objective)
+                             + unattributed, limits)
     doc = document(result)
     if doc["unexplained"]:  # open-library fallback: propose terms for what no named effect explains
-        doc["proposed_terms"] = propose_terms(diag, p, doc["unexplained"])
-    doc["seconds"] = round(_time.perf_counter() - diag.started, 2)
+        doc["proposed_terms"] = propose_terms(objective, p, doc["unexplained"])
+    doc["seconds"] = round(time.perf_counter() - setup.started, 2)
     return result, doc

@@ -1,15 +1,22 @@
-"""Preparing recordings for the diagnosis: the checks a recording must pass,
-several recordings of one joint joined, each encoder zero placed, and the
+"""The first stage: recordings made ready for the diagnosis. The checks a
+recording must pass, several recordings of one joint joined, the folds and
+the fit sample, the residual channels, each encoder zero placed, and the
 eq. (7) kinematic-error terms a parameter set has."""
 from __future__ import annotations
 
 import math
+import time
+from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 
+from hdjoint.diagnosis.channels import Channel, Evaluator, channels_for
 from hdjoint.diagnosis.kinematics import folds as make_folds
+from hdjoint.diagnosis.kinematics import kinematics
+from hdjoint.diagnosis.part_torques import Prepared
 from hdjoint.diagnosis.kinematics import sample_windows, window_labels
-from hdjoint.diagnosis.rules import ANALYSED_SECONDS, FOLDS, MIN_DURATION, MIN_SAMPLES
+from hdjoint.diagnosis.rules import ANALYSED_SECONDS, FIT_SAMPLES, FOLDS, MIN_DURATION, MIN_SAMPLES
 from hdjoint.diagnosis.structure import RESOLVING_PERIODS, resolves
 from hdjoint.io import parameters
 from hdjoint.io.recording import Recording
@@ -125,3 +132,58 @@ def joined(recordings: list[Recording]) -> tuple[Recording, np.ndarray, np.ndarr
 # against the torque level. Their channels against the torque sensor are
 # compared free of their mean over the fit rows (profiled out, like a
 # fitted offset).
+
+
+@dataclass(frozen=True)
+class Setup:
+    """One or several recordings of a joint, ready to be diagnosed against a
+    nominal set: what every later stage reads. The folds alternate: even ones
+    fit, odd ones are held out; samples where the smoothing filter runs off a
+    window's ends take no part."""
+    recordings: list[Recording]
+    source: Recording            # the first recording whole; `rec` is what is analysed
+    rec: Recording
+    fold: np.ndarray
+    prep: Prepared
+    channels: list[Channel]
+    eval: Evaluator
+    train: np.ndarray
+    test: np.ndarray
+    used: np.ndarray
+    stride: int                  # training samples per fit sample
+    fit_index: np.ndarray
+    nominal: dict
+    tolerance: dict
+    say: Callable[[str], None] = field(repr=False, default=lambda message: None)
+    workers: int | None = None   # processes that fit a round's hypotheses (None: one per core)
+    started: float = 0.0
+
+    @property
+    def has_sensor(self) -> bool:
+        return self.rec.tau_sensor is not None
+
+    def channels_of(self, part: str) -> list[Channel]:
+        return [c for c in self.channels if part in c.parts()]
+
+
+def prepare(rec: Recording | list[Recording], nominal: dict[str, float], tolerance: dict[str, float] | None = None,
+            progress: Callable[[str], None] | None = None, workers: int | None = None) -> Setup:
+    """Check and join the recordings, and lay out the folds, the fit sample and the residual channels."""
+    started = time.perf_counter()
+    recordings = list(rec) if isinstance(rec, (list, tuple)) else [rec]
+    for r in recordings:
+        check_recording(r)
+    say = progress or (lambda message: None)
+    whole, starts, t_rel, fold = joined(recordings)
+    if len(starts) > len(recordings):
+        say(f"analysing {len(starts)} windows spread over the recordings, {ANALYSED_SECONDS:.0f} s in all")
+    prep = Prepared(whole, kinematics(whole, starts=starts), t_rel, starts)
+    channels = channels_for(whole.tau_sensor is not None)
+    evaluator = Evaluator(prep, channels)
+    train = (fold % 2 == 0) & prep.kin.valid
+    test = (fold % 2 == 1) & prep.kin.valid
+    stride = max(1, int(np.count_nonzero(train) // FIT_SAMPLES))
+    fit_index = np.flatnonzero(train)[::stride]
+    evaluator.offset_rows = fit_index
+    return Setup(recordings, recordings[0], whole, fold, prep, channels, evaluator, train, test, train | test, stride,
+                 fit_index, dict(nominal), dict(tolerance or {}), say, workers, started)

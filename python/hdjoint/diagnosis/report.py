@@ -180,7 +180,7 @@ def _extrapolation_notes(entries: list[dict]) -> str:
 
 def build(result, doc: dict) -> str:
     """The report's HTML for a finished diagnosis (DiagnosisResult) and its findings document."""
-    diag = result.engine
+    diag = result.objective
     rec, kin = diag.rec, diag.prep.kin
     p0, p1 = result.calibrated_params, doc["params"]
     sections = []

@@ -1,30 +1,66 @@
-"""What a diagnosis returns besides its findings document: every stage's
+"""What a diagnosis returns besides its findings document: each stage's
 result, read by findings, report, validation and the benchmarks."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
 
+from hdjoint.diagnosis.calibrate import Calibration
 from hdjoint.diagnosis.calibration import Calibrated
-from hdjoint.diagnosis.hypotheses import Finding
+from hdjoint.diagnosis.hypotheses import Finding, Fit
+from hdjoint.diagnosis.objective import Objective
+from hdjoint.diagnosis.search import HypothesisSearch
+from hdjoint.diagnosis.select import Selection
 
 
-@dataclass
+@dataclass(frozen=True)
 class DiagnosisResult:
-    """What a diagnosis found, for findings.py and report.py to read."""
-    engine: Any                       # the Diagnosis: residuals and signals, for figures and figures of merit
-    nominal: dict
-    calibrated_params: dict           # after calibration, before any finding
-    params: dict                      # the corrected set
-    findings: list[Finding]
-    calibration: dict[str, Calibrated]
-    tested: list[list[dict]]
-    not_testable: list[dict]
-    sigma: dict[str, float]
-    located: list[dict] = field(default_factory=list)
-    unexplained: list[dict] = field(default_factory=list)
-    orders_not_found: list[dict] = field(default_factory=list)
+    objective: Objective              # residuals and signals at the calibrated noise, for figures and figures of merit
+    calibrated: Calibration           # the calibration stage
+    selection: Selection              # the selection stage
+    search: HypothesisSearch          # the search as the selection left it (its last round's null), for the limits
+    findings: list[Finding]           # added and resized
+    calibration: dict[str, Calibrated]  # each calibrated parameter at the corrected set
+    located: list[dict] = field(default_factory=list)      # structure in the calibrated model's residuals
+    unexplained: list[dict] = field(default_factory=list)  # structure no finding explains
     limits: list = field(default_factory=list)  # detection_limit.Limit per effect tested and not accepted
+
+    @property
+    def nominal(self) -> dict:
+        return self.objective.nominal
+
+    @property
+    def calibrated_params(self) -> dict:
+        """After calibration, before any finding."""
+        return self.calibrated.params
+
+    @property
+    def params(self) -> dict:
+        """The corrected set."""
+        return self.selection.params
+
+    @property
+    def last_fit(self) -> Fit:
+        return self.selection.last_fit
+
+    @property
+    def current_alignment(self) -> dict | None:
+        return self.calibrated.current_alignment
+
+    @property
+    def tested(self) -> list[list[dict]]:
+        return self.selection.tested
+
+    @property
+    def not_testable(self) -> list[dict]:
+        return self.selection.not_testable
+
+    @property
+    def orders_not_found(self) -> list[dict]:
+        return self.selection.orders_not_found
+
+    @property
+    def sigma(self) -> dict[str, float]:
+        return dict(self.objective.sigma)
 
     @property
     def beyond_tolerance(self) -> list[Calibrated]:

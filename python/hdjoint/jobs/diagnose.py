@@ -43,7 +43,7 @@ def diagnose_to_directory(recording, params, out, validate=(), time_unit: str | 
         if others:
             _progress("checking the corrected model on the other recordings")
             doc["validation"] = [validate_on(o, result.nominal, result.calibrated_params, doc["params"],
-                                             fitted_on=result.engine.prep) for o in others]
+                                             fitted_on=result.objective.prep) for o in others]
     except DiagnosisError as e:
         raise UserError(str(e)) from None
     page = report.build(result, doc)
