@@ -120,3 +120,11 @@ def test_one_conftest_for_the_whole_suite():
     # whole session and break those imports whenever both are collected.
     tests = Path(__file__).resolve().parents[1]
     assert [p.relative_to(tests).as_posix() for p in tests.rglob("conftest.py")] == ["conftest.py"]
+
+
+def test_the_architecture_page_names_every_module():
+    """docs/architecture.md is where a newcomer finds a module's job: each one is named there."""
+    page = (Path(__file__).resolve().parents[2] / "docs" / "architecture.md").read_text()
+    missing = sorted(m for m in _graph() if not m.endswith("._core") and m.count(".") >= 2 and
+                     not (PACKAGE / m.split(".", 1)[1].replace(".", "/")).is_dir() and f"`{m.rsplit('.', 1)[1]}`" not in page)
+    assert not missing, f"docs/architecture.md does not name: {missing}"
