@@ -15,13 +15,12 @@ import argparse
 import json
 import os
 import pathlib
-import platform
 import tempfile
 import time
-from datetime import datetime, timezone
 
 import numpy as np
 
+import stamp
 from hdjoint.fleet import trend
 from hdjoint.fleet.generate import JOINT_PATTERN, generate
 from hdjoint.fleet.run import connect, run_fleet
@@ -125,9 +124,7 @@ def main():
     root, pmap = fleet(args.days, args.joints)
     recordings = spread(sorted(str(p) for p in (root / "logs").rglob("*.csv")), args.speedup)
     lines = [f"# Fleet benchmark", "",
-             f"{datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC, {platform.node()}: {os.cpu_count()} cores, "
-             f"{platform.processor() or platform.machine()}, Python {platform.python_version()}; shared machine, "
-             f"{load()} at the start.", "",
+             stamp.generated_by(f"python benchmarks/bench_fleet.py --command {args.command}"), "",
              f"## Throughput: `fleet {args.command}`, {len(recordings)} recordings of 20 s", "",
              "| workers | recordings/min | wall (s) | mean task (s) | fleet bookkeeping per reused recording (s) "
              "| Dask per no-op task (ms) | load during |", "|---|---|---|---|---|---|---|"]

@@ -14,9 +14,7 @@ Run: python benchmarks/estimate_memory.py [--rows 2400000] [--paths fmu batch ba
 from __future__ import annotations
 
 import argparse
-import datetime
 import os
-import platform
 import shutil
 import subprocess
 import sys
@@ -24,6 +22,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import stamp
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -102,8 +101,7 @@ def main(argv=None) -> int:
                 print(rows[-1], file=sys.stderr, flush=True)
                 out.unlink(missing_ok=True)
     lines = ["# Peak memory of `hdjoint estimate` (benchmarks/estimate_memory.py)", "",
-             f"{datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC, {platform.machine()}, "
-             f"{os.cpu_count()} cores (shared), Python {platform.python_version()}; a synthetic recording of "
+             stamp.generated_by("python benchmarks/estimate_memory.py") + " A synthetic recording of "
              f"{args.rows} rows at 1 kHz, {size:.0f} MB.", "",
              "| code | path | peak RSS (MB) | × file size | seconds | exit |", "|---|---|---:|---:|---:|---:|"]
     lines += [f"| {label} | {engine} | {mb:.0f} | {ratio:.2f} | {s:.0f} | {code} |"

@@ -9,12 +9,11 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import datetime
 import pathlib
-import platform
 import time
 from concurrent.futures import ProcessPoolExecutor
 
+import stamp
 from hdjoint.fmu.concealed_effects import CASES, nominal_for, record
 from hdjoint.diagnosis.pipeline import diagnose
 
@@ -44,7 +43,7 @@ def main():
     with ProcessPoolExecutor(args.workers) as pool:
         rows = list(pool.map(run, jobs))
     alarms = sum(r[2] != "consistent" for r in rows)
-    lines = [f"# False alarms on controls ({datetime.date.today()}, {platform.node()}, {platform.processor() or platform.machine()})",
+    lines = ["# False alarms on controls", "", stamp.generated_by("python benchmarks/false_alarms.py"),
              "", f"`python benchmarks/false_alarms.py --duration {args.duration:g} --seeds "
              f"{' '.join(map(str, args.seeds))} --experiments {' '.join(args.experiments)}`: {len(rows)} control recordings "
              f"of {args.duration:g} s; **{alarms} of {len(rows)} raise an alarm** "

@@ -10,11 +10,8 @@ Run: python benchmarks/fuzz_fmus.py [--sequences N] [--timeout CPU_SECONDS] [--f
 from __future__ import annotations
 
 import argparse
-import datetime
 import hashlib
 import json
-import os
-import platform
 import sys
 import tempfile
 import time
@@ -24,6 +21,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "fuzz"))
 
 from fmi_fuzzer import CATEGORIES, FMU_NAMES, Campaign, summarise  # noqa: E402
+import stamp
 from hdjoint.fmu.shipped import fmu_path  # noqa: E402
 
 
@@ -61,9 +59,7 @@ def write_report(out: Path) -> str:
     lines = [
         "# FMI call-sequence fuzzing (benchmarks/fuzz_fmus.py)",
         "",
-        f"{datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC, "
-        f"{platform.machine()}, {os.cpu_count()} cores (shared), Python {platform.python_version()}; "
-        "each sequence in a forked child; FMU builds (sha256): "
+        stamp.generated_by("python benchmarks/fuzz_fmus.py") + " Each sequence in a forked child; FMU builds (sha256): "
         + ", ".join(f"{n} {h}" for n, h in build.items()) + ".",
         "",
         "Sequences with at least one finding / findings in all:",

@@ -27,15 +27,14 @@ from __future__ import annotations
 
 import argparse
 import json
-import subprocess
 from collections import defaultdict
-from datetime import datetime, timezone
 from pathlib import Path
 
 import numpy as np
 from results import RESULTS_DIR, ResultsPage
 from threadpoolctl import threadpool_limits
 
+import stamp
 from hdjoint.diagnosis.calibrate import calibrate as calibrate_stage
 from hdjoint.diagnosis.prepare import prepare
 from hdjoint_truth.cases import CONTROL_CASES, draw, record
@@ -104,14 +103,6 @@ def _seeds(text: str) -> range:
     return range(int(first), int(last or first) + 1)
 
 
-def _commit() -> str:
-    try:
-        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                              cwd=Path(__file__).parent, check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
-
-
 def write_factors(rows: list[dict], seeds: range, duration: float) -> dict:
     train = [r for r in rows if r["seed"] in seeds]
     factors = fit_factors(train)
@@ -119,8 +110,8 @@ def write_factors(rows: list[dict], seeds: range, duration: float) -> dict:
         "factors": factors,
         "measured": {"by": f"python benchmarks/interval_coverage.py --fit-factors {seeds[0]}-{seeds[-1]}",
                      "seeds": [seeds[0], seeds[-1]], "recordings": len({(r["kind"], r["seed"]) for r in train}),
-                     "duration_s": duration, "commit": _commit(),
-                     "date": f"{datetime.now(timezone.utc):%Y-%m-%d}"}}, indent=1) + "\n")
+                     "duration_s": duration, "commit": stamp.commit(),
+                     "date": stamp.now()}}, indent=1) + "\n")
     print(f"wrote {FACTORS}")
     return factors
 

@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from lara8_table import DATA, JOINTS, K1, KT, TOOTH_RATIO, generated_by, halves, markdown_table, read_joint  # noqa: E402
+from lara8_data import DATA, JOINTS, K1, KT, TOOTH_RATIO, generated_by, halves, markdown_table, read_joint  # noqa: E402
 from lara8_torsion import regress  # noqa: E402
 
 from hdjoint.io import parameters  # noqa: E402

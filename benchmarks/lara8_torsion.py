@@ -27,7 +27,7 @@ import numpy as np
 from scipy.stats import norm
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from lara8_table import CURRENT_SIGN, DATA, K1, KT, TOOTH_RATIO, gear_ratio, generated_by, \
+from lara8_data import CURRENT_SIGN, DATA, K1, KT, TOOTH_RATIO, gear_ratio, generated_by, \
     markdown_table  # noqa: E402
 
 from hdjoint.io import parameters  # noqa: E402

@@ -128,3 +128,38 @@ def test_the_architecture_page_names_every_module():
     missing = sorted(m for m in _graph() if not m.endswith("._core") and m.count(".") >= 2 and
                      not (PACKAGE / m.split(".", 1)[1].replace(".", "/")).is_dir() and f"`{m.rsplit('.', 1)[1]}`" not in page)
     assert not missing, f"docs/architecture.md does not name: {missing}"
+
+
+def test_the_benchmarks_have_no_circles_and_share_no_private_names():
+    """Benchmarks import each other one way and only public names (the stamp, the LARA8
+    conventions and the independent truth are modules of their own)."""
+    folder = Path(__file__).resolve().parents[2] / "benchmarks"
+    scripts = {p.stem: p for p in folder.glob("*.py")}
+    graph, private = {}, []
+    for name, path in scripts.items():
+        graph[name] = set()
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                graph[name] |= {a.name for a in node.names if a.name in scripts}
+            elif isinstance(node, ast.ImportFrom) and node.module in scripts:
+                graph[name].add(node.module)
+                private += [f"{name} imports {node.module}.{a.name}" for a in node.names if a.name.startswith("_")]
+            elif isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.attr.startswith("_") \
+                    and node.value.id in ("independent", *scripts) and not node.attr.startswith("__"):
+                private.append(f"{name} reads {node.value.id}.{node.attr}")
+    assert not private, private
+    seen, circles = {}, []
+
+    def visit(node, trail):
+        seen[node] = 1
+        for nxt in sorted(graph[node]):
+            if seen.get(nxt) == 1:
+                circles.append(" -> ".join(trail[trail.index(nxt):] + [nxt]))
+            elif nxt not in seen:
+                visit(nxt, trail + [nxt])
+        seen[node] = 2
+
+    for name in sorted(graph):
+        if name not in seen:
+            visit(name, [name])
+    assert not circles, circles
