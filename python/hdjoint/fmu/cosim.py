@@ -29,6 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
+from hdjoint.fmu.shipped import shipped_file
+
 SYSTEMS = ("JointTorqueFeedback", "JointTorqueFeedbackSensor", "JointTorqueFeedbackHat")
 MASTERS = ("fmpy", "libcosim-ssp", "libcosim-osp", "ecos", "maestro")
 _SYSTEM_DIR = Path(__file__).parents[1] / "systems"  # installed beside the package's top
@@ -44,12 +46,7 @@ SIGNALS = (
 
 def ssp_path(name: str = "JointTorqueFeedback") -> Path:
     """Path of a shipped SSP archive (SystemStructure.ssd + resources/*.fmu)."""
-    if name not in SYSTEMS:
-        raise ValueError(f"unknown system '{name}'; known: {', '.join(SYSTEMS)}")
-    path = _SYSTEM_DIR / f"{name}.ssp"
-    if not path.is_file():
-        raise FileNotFoundError(f"{path} is missing: the package was installed without its systems (pip install .)")
-    return path
+    return shipped_file(_SYSTEM_DIR, name, SYSTEMS, ".ssp", "system")
 
 
 def osp_structure_path() -> Path:
