@@ -117,9 +117,8 @@ class _TorsionBasis:
     """The torsion less the kinematic error as base - amplitudes . columns, for
     one shape (KINEMATIC_SHAPE): as itself, its part above the transmission's
     filter, and its rate through that filter (VIEWS). A fit moves the
-    amplitudes (a0 alone in 646 of the 936 recomputations of a 58 s
-    recording's diagnosis, profiled), and each recomputation had run the
-    compliance model and two filters over the whole run. a0 is an offset,
+    amplitudes (a0 most often), and recomputing would run the compliance
+    model and two filters over the whole run each time. a0 is an offset,
     which neither filtered view sees."""
     shape: tuple
     base: dict  # view -> the torsion with every amplitude 0
@@ -285,11 +284,10 @@ def smoothed_friction(prep: Prepared, p: dict) -> np.ndarray:
     filter: the law on the encoders' speed, then smoothed. Friction switches
     within a fraction of a millisecond at a reversal; its smoothed value is a
     step blurred over the filter there, while the law alone switches as
-    sharply as it does. On a 3 Hz chirp that difference was 0.2 N.m RMS in
-    tau_M (ten times the noise floor). (The law on a sharper, 2.5-sample
-    speed was closer on the chirp, but while the motor creeps below a count
-    per window that speed is quantisation, which a Stribeck term at
-    omega_s = 0.006 rad/s then fitted.)"""
+    sharply as it does; on a fast excitation that difference stands well
+    above the noise in tau_M. (The law on a sharper speed would not do:
+    while the motor creeps below a count per window that speed is
+    quantisation, which a Stribeck term with a tiny omega_s would fit.)"""
     key = tuple(_get(p, n) for n in friction_law_parameters())
     if prep._friction is None or prep._friction[0] != key:
         law = motor_friction(p, prep.kin.omega_m, prep.t_rel)

@@ -46,9 +46,9 @@ def fold_z(relative: np.ndarray) -> float:
 def relative_fold_gains(before: np.ndarray, after: np.ndarray) -> np.ndarray:
     """(before - after) / before per fold; NaN for a fold that compares
     nothing (before = 0: a channel blind there, as the motor's at rest), which
-    says nothing either way. Counted as gains of 0 such folds capped the z of
-    a motor effect and its share of improved folds (13 of 20 at most on the
-    sweep with dwells, where 7 of 20 held-out folds rest)."""
+    says nothing either way. Counted as gains of 0, such folds would cap the
+    z of a motor effect and its share of improved folds on a recording whose
+    motor rests in many folds."""
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where(before > 0, (before - after) / np.where(before > 0, before, 1.0), np.nan)
 
