@@ -81,7 +81,7 @@ class HypothesisSearch:
                                unresolved_trend(values, angle, through))
         for channel in channels:
             # Not the fit's residual, 0 where the channel is blind: a ripple's
-            # prediction there counted as error (and a fold of rest, 0/0, as -1e295).
+            # prediction there would count as error (and a fold of rest, 0/0, as a huge loss).
             r = self.objective.shown_residual(channel, p) + added.get(channel.name, 0.0)
             for angle, (values, through, orders, trend) in searched.items():
                 seen = []
