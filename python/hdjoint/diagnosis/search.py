@@ -197,8 +197,8 @@ class HypothesisSearch:
         """Why a hypothesis's gain is not its own, or None: with its terms back
         at `p`'s values and the part's refitted parameters kept, the fit must
         predict held-out data worse by more than MIN_GAIN: otherwise the gain
-        came from the refitted parameters (a softer Kf, say) and a negligible
-        term of the effect rode along."""
+        comes from the refitted parameters (a softer Kf, say) and a negligible
+        term of the effect rides along."""
         without = dict(fitted, **{n: p[n] for n in names})
         own = held_out_gain_sq(self.objective.squared(without, channels), after, self.objective.fold, self.objective.test)
         if own.gain > MIN_GAIN:

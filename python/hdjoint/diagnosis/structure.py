@@ -287,7 +287,7 @@ def order_search(angle, residual, fold, train, test, orders, exclude=(), name="t
         pred, amp = coef[:2] @ basis[:2], float(np.hypot(coef[0], coef[1]))
         # The floor is read off what the order leaves: a strong ripple's own
         # leakage into its off-orders (a sweep visits its angles unevenly) is
-        # not broadband structure. Left in, it would hold even a dominant ripple
+        # not broadband structure. Left in, it would hold even a strong ripple
         # under ORDER_PROMINENCE.
         rest = np.where(ok, res - pred, 0.0)
         floor = np.median([np.hypot(*_floor_coefficients(angle, k + d, through, rest, floor_rows, trend)[:2])
