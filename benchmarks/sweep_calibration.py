@@ -1,5 +1,5 @@
 """What the calibration makes of the independent truth's sweep controls
-(docs/diagnosis_measurements.md, "Sweeps: the motor at rest"): each seed's drawn truth,
+(motor_rest.py says why the motor at rest matters): each seed's drawn truth,
 and the same truth changed in one thing (its friction law made tanh with the
 same Fc and omega_fc; its structural damping Df set to 0), calibrated as
 the diagnosis does. Prints Jm and Kt as multiples of their nominal values,

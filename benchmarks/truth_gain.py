@@ -1,6 +1,6 @@
 """What the right hypothesis would gain on one independent-truth recording,
 with the truth's own effect size: whether the recording can reveal the
-effect at all (docs/diagnosis_measurements.md, "Sweeps (seed 2)").
+effect at all (cannot_tell.py says so beside a `consistent` verdict).
 
   python benchmarks/truth_gain.py "coulomb friction" 2 coulomb_friction
 

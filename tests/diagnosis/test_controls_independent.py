@@ -31,7 +31,7 @@ def test_chirp_control_with_a_held_current_is_consistent():
 
 
 def test_multisine_control_with_a_sharp_coulomb_smoothing_is_not_a_stribeck():
-    # The benchmark's 30 s (at 20 s this joint is still named Stribeck, p = 4e-6: docs/diagnosis_measurements.md, "Controls").
+    # The benchmark's 30 s (shorter, this joint can still be named Stribeck).
     joint = _control("paper", 0, 30.0)  # tanh friction smoothed over 0.14 rad/s; its second recording is a multisine
     assert joint.setups[1].excitation == "multisine" and joint.form.omega_fc < 0.2
     _, doc = diagnose(record(joint, 1), joint.nominal)

@@ -34,9 +34,8 @@ def test_controls_are_consistent(name):
     ("link friction", "link_friction", DURATION),
     ("backlash", "backlash", DURATION),
     ("viscous friction", "viscous_friction", DURATION),
-    # Was a strict xfail (the drift's gain uneven over the folds, z = 1.4-1.8):
-    # a drift is now judged by its pooled held-out gain against the simulated
-    # null (docs/diagnosis_measurements.md, "Thermal drift of Kt: the law and its test").
+    # The drift's gain is uneven over the folds: a drift is judged by its
+    # pooled held-out gain against the simulated null (Effect.uneven_over_folds).
     ("thermal drift", "thermal_drift", DURATION),
     # These three need the benchmark's 30 s: at 20 s their held-out gain
     # is not yet significant fold by fold (the verdict is then consistent).

@@ -2,10 +2,9 @@
 diagnosis fits the loop on the torsion through the transmission's filter;
 the FMU drives it with the raw encoder angles. On the independent truth's
 hysteresis cases the fitted loops switch over less than one encoder count
-of torsion: on seed 0 the FMU gains from the loop held out (-4.8 %), on
-seed 1 it loses (+3.4 %). Each finding says which, and the report's
-summary carries the caveat where the FMU loses
-(docs/diagnosis_measurements.md, "The fitted loop in the estimator FMU")."""
+of torsion, so the FMU may gain from the loop held out or lose. Each
+finding says which, and the report's summary carries the caveat where the
+FMU loses."""
 import pytest
 
 from hdjoint.diagnosis.pipeline import diagnose

@@ -1,11 +1,10 @@
 """Backlash on the independent truth (seed 0, the paper excitation): a dead
 zone helps the held-out folds that hold slow reversals of the torque and
 not the rest, so its gain is uneven over the folds by nature. Judged by the
-folds' z (> 3) it was not named: 18 % held-out gain at z 1.7, and the
-wave generator's compliance led the look-alike set in its place. Judged by its pooled
-gain against the simulated null (Effect.uneven_over_folds, as the drift),
-it is named first; on the 40 controls this gave the same single false
-alarm as before (docs/diagnosis_measurements.md, "Reversals judged pooled")."""
+folds' z it would not be named, and a look-alike would lead in its place.
+Judged by its pooled gain against the simulated null
+(Effect.uneven_over_folds, as the drift), it is named first
+(benchmarks/false_alarms.py measures what this costs on controls)."""
 import pytest
 
 from hdjoint.diagnosis.pipeline import diagnose

@@ -1,6 +1,6 @@
-"""The motor at rest on a sweep with dwells (docs/diagnosis_measurements.md,
-"Sweeps: the motor at rest"): static friction holds there what no speed law can say, and
-the motor channel does not compare it."""
+"""The motor at rest on a sweep with dwells (motor_rest.py): static
+friction holds there what no speed law can say, and the motor channel does
+not compare it."""
 import numpy as np
 import pytest
 
@@ -67,9 +67,8 @@ def test_a_lugre_sweep_control_calibrates_jm_and_kt_near_the_truth():
 @pytest.mark.slow
 def test_cogging_is_tested_and_accepted_on_the_sweep_with_dwells():
     """Seed 2's cogging case (order 6 of the motor angle, first recording a
-    sweep): 7 of 20 held-out folds rest. Counted as folds, they made the z of
-    every motor-angle order 0, and the diagnosis said `thermal_drift`
-    (docs/diagnosis_measurements.md, "Blind folds")."""
+    sweep), where many held-out folds rest. Counted as folds, they would
+    zero the z of every motor-angle order (structure.relative_fold_gains)."""
     from hdjoint.diagnosis.effects import EFFECTS
     from hdjoint_truth.cases import EFFECT_CASES
     joint = draw(next(c for c in EFFECT_CASES if c.name == "cogging"), 2)

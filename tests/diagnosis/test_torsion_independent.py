@@ -1,13 +1,13 @@
 """Torsion-side effects on the independent truth (hdjoint_truth; issue 10,
 items 2, 3, 4, 7): the transmission channel no longer hides them behind the
 flexspline's structural damping, and the hysteresis hypothesis follows the
-torsion the encoders can resolve (docs/diagnosis_measurements.md, "Torsion-side effects").
+torsion the encoders can resolve.
 
-The truth's hysteresis is a Bouc-Wen loop of +-0.1 N.m that switches over
-3e-6 rad of torsion; its structural damping (Df = 2-8 N.m.s/rad) is most of
-the transmission residual on fast excitations. On the base engine (7e1c2e9)
-this joint is `consistent`: the hypothesis, driven by raw encoder increments
-that flip its loop with every count, explains 3.9 % held out at z = 2.8."""
+The truth's hysteresis is a Bouc-Wen loop that switches over a fraction of
+an encoder count of torsion; its structural damping is most of the
+transmission residual on fast excitations. A hypothesis driven by raw
+encoder increments, which flip its loop with every count, leaves this
+joint `consistent`."""
 import pytest
 
 from hdjoint.diagnosis.pipeline import diagnose

@@ -25,7 +25,7 @@ REPRODUCERS = {
         "JointTorqueEstimator", [["instantiate"], ["deserialize", 0, ["foreign", "HarmonicDriveJoint"], 0]]),
     "a state-machine field edited to an invalid value": (
         "JointController", START + [["getstate", 0], ["serialize", 0, 0], ["deserialize", 0, ["state", 0, 64.0], 1]]),
-    # The 1,000-sequence run after the merge (docs/results/fuzz_after_merge): a
+    # Found by the long fuzz run (benchmarks/fuzz_fmus.py): a
     # state-machine field edited to another valid state deserialised (error
     # or step complete edited to "instantiated"); the state's CRC-32 seal refuses it.
     "controller: error state edited to instantiated (seed 121)": (

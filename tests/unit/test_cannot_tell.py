@@ -19,7 +19,7 @@ def _result(last_round, calibration=(), unexplained=(), limits=()):
 
 
 def test_a_sweeps_coulomb_friction_and_its_absorbed_inertia_are_said():
-    # seed 2's sweep with Coulomb friction missing, as measured (docs/diagnosis_measurements.md, "Sweeps (seed 2)")
+    # figures shaped like the independent truth's sweep (seed 2) with Coulomb friction missing
     result = _result([_tested("coulomb_friction", 0.2848, -1.24, -12197.2),
                       _tested("backlash", -0.0, 0.71, 9.6)],
                      [Calibrated("Jm", 2.09e-5, 8.39e-5, 1e-6, Prior(2.09e-5, 2.09e-6)),

@@ -2,8 +2,7 @@
 charge (channels.current_charge): a current that alternates from sample to
 sample, logged at jittered time stamps, must not alias into the band the
 filter passes. The independent truth's speed loop does exactly that on its
-sweeps, and the aliased alternation read as a 0.34 ms current delay on a
-control (docs/diagnosis_measurements.md)."""
+sweeps, and an aliased alternation would read as a current delay."""
 import numpy as np
 import pytest
 

@@ -10,11 +10,10 @@ sees residuals that are correlated or carry model-form error (a friction
 law of another shape, unmodelled damping) as the scatter of the blocks'
 scores, where the Laplace approximation assumes white residuals. Each
 parameter's interval is the wider of the two, times its model-form factor:
-how much wider the interval must be to contain the truth 95 % of the time
-on joints simulated by independently written code (another friction law,
-integrator, sensor chain), measured on training seeds and checked on others
-(benchmarks/interval_coverage.py, docs/results/interval_coverage.md; 1 for
-a parameter never measured). A parameter is identified by the recording when its posterior is
+how much wider the interval must be to contain the truth at the INTERVAL
+rate on joints simulated by independently written code (another friction
+law, integrator, sensor chain), fitted and checked on separate draws by
+benchmarks/interval_coverage.py (1 for a parameter it has no factor for). A parameter is identified by the recording when its posterior is
 less than half as wide as its prior, and moved beyond its tolerance when
 its estimate lies more than RESIZE_Z tolerances from the nominal value.
 """

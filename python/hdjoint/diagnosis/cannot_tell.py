@@ -1,13 +1,10 @@
 """What a recording cannot tell, said beside a `consistent` verdict.
 
-`consistent` claims that nothing is missing. On a slow sweep with dwells
-(the independent truth's seed 2) Coulomb and viscous friction, backlash and
-a current delay were each missing and each came out `consistent`: their
-hypotheses explained 2-28 % of the held-out residual, with the training
-data behind them (delta BIC -450 to -12000), but not fold by fold (z -1.2
-to 2.7 where 3 is needed), because the folds at rest and the folds in motion
-disagree; or calibration took the effect into a constant of the joint (Jm
-at 4x, Kt at 0.7x). The recording could not tell, and says so:
+`consistent` claims that nothing is missing, yet a missing effect can
+come out `consistent`: its hypothesis is supported by the training data
+but not fold by fold (folds at rest and folds in motion disagree), or
+calibration took it into a constant of the joint. The recording could not
+tell, and says so:
 
   - a hypothesis of the last round that was not accepted but explains at
     least SEEN_GAIN of the held-out residual with the training data's
@@ -19,8 +16,8 @@ at 4x, Kt at 0.7x). The recording could not tell, and says so:
     (detection_limit.py: the smallest size this recording shows).
 
 Each item names what to record to settle it (the effect's `revealed_by`).
-The verdict is not changed (the false-alarm rate on controls is measured on
-the verdict); findings.json carries the list as `cannot_tell` and the
+The verdict is not changed (benchmarks/false_alarms.py measures the
+false-alarm rate on the verdict); findings.json carries the list as `cannot_tell` and the
 report's summary shows it."""
 from __future__ import annotations
 

@@ -75,17 +75,13 @@ def mean_allowance(channel: Channel, p: dict, largest_current: float) -> float:
     alone, up to N*Kt times CURRENT_OFFSET_SHARE of the largest current
     (`largest_current`, A): the current's offset N*Kt*i_0 is the motor
     side's alone, while a0, the transmission's constant, is shared by both
-    channels. Held to one a0, the link channel took the opposite offset and
-    its gravity term bent to it along the link angle: on the independent
-    truth's controls without a sensor (current offsets up to 0.01 A, 0.045
-    N.m) three of 20 were `unexplained` (torque level, motor speed), all
-    three `consistent` with the truth's offset removed or this channel
-    free of its mean. Only up to a sensor's offset: freed of all of it, the
-    motor channel let a0 take the whole static link torque of LARA8 joint2
-    (80-160 N.m, 10 A of current) and gravity was hidden. The link channel
-    keeps its mean (a0 owns it), so a load that never changes sign stays
-    there: mean-free, that same load was hidden (gravity 31 % held out,
-    not accepted) and the verdict was `consistent`."""
+    channels. Held to one a0, the link channel would take the opposite
+    offset and bend its gravity term to it. Only up to a sensor's offset:
+    freed of all of it, the motor channel would let a0 take a static link
+    torque and hide gravity. The link channel keeps its mean (a0 owns it),
+    so a load that never changes sign stays visible there.
+    benchmarks/sensorless_controls.py measures this on controls without a
+    sensor."""
     if channel.reference == "sensor":
         return math.inf if channel.parts() & OFFSET_FREE_PARTS else 0.0
     if "motor" in channel.parts():
@@ -153,10 +149,10 @@ class Evaluator:
         """The estimate `channel` subtracts, through the smoothing filter when
         its reference is seen through it (Channel.smooths_part). Without a
         sensor, the transmission's unsmoothed torque against the motor's
-        smoothed one left tau_T's band above the filter in the residual,
-        which a softer spring shrinks: on the independent truth's controls
-        the calibration put Kf at 0.2-0.4 times the truth's, with an
-        interval that excluded it (0.6-0.8 times smoothed alike)."""
+        smoothed one would leave tau_T's band above the filter in the
+        residual, which a softer spring shrinks: calibration would bias Kf
+        low to make up for it (benchmarks/sensorless_controls.py reports
+        where calibration puts Kf)."""
         value = self.estimate(channel.part, p)
         if not channel.smooths_part():
             return value

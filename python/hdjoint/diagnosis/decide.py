@@ -19,10 +19,8 @@ def rival(best: Hypothesis, other: Hypothesis) -> bool:
     less of it: accepted on its own, or explaining at least as much held out
     and significant against the simulated null, though uneven over the folds.
     Naming the best alone would then be a confident name the data do not
-    single out: on the independent truth's multisine a wave-generator
-    compliance at 4 times its concealed size came out as backlash (added,
-    0.4 % held out), while the compliance's own terms took 0.8 % (p = 6e-5,
-    13 of 20 folds)."""
+    single out: a look-alike can explain as much as the best while being
+    too uneven over the folds to be accepted on its own."""
     if not best.effect.looks_like(other.effect):
         return False
     return (other.accepted() or other.explains_as_much_as(best)) and not separated(best, other)

@@ -1,12 +1,12 @@
 """The smallest size of each untold effect this recording would have shown.
 
 `consistent` says nothing is missing, but only as far as the recording can
-tell. On the independent truth's joints a wave-generator compliance (Kw 40,
-Cw 10) came out `consistent` on every seed: over the +-4.4 N.m those
-recordings carry, it is a 2.5 % softer flexspline and a curvature of a
-seventh of an encoder count, which Kf and Cf take. Its own terms, fitted
-from the truth's values, gained under 0.8 % held out (effect_detectability.md).
-A verdict should say that, and how large the effect must be to show.
+tell. An effect small against the torques a recording carries looks like
+a slight change of the calibrated parameters (a wave-generator compliance
+like a softer flexspline, which Kf and Cf take) and is not named
+(benchmarks/effect_detectability.py asks whether missed effects could
+have been found). A verdict should say that, and how large the effect must
+be to show.
 
 For every effect the last round tested without accepting it, the effect is
 planted into the corrected model at sizes around a reference (Effect.size),
@@ -20,15 +20,15 @@ and the diagnosis's own test is run on what it would add:
     effect's fit (on its own, as if independent of the residual, it must
     also explain over MIN_GAIN of it: planted_gains): held-out gain, fold
     z and the p-value against the simulated null, with the acceptance
-    rules of a hypothesis (gain > 0.3 %, z > 3 over >= 70 % of the folds,
-    or pooled against the null for an effect uneven over the folds; p <=
-    the false discovery rate).
+    rules of a hypothesis (rules.passes: gain over MIN_GAIN, z over
+    EVIDENCE_Z over STEADY_FOLD_SHARE of the folds, or pooled against the
+    null for an effect uneven over the folds; p within the false discovery
+    rate).
 
 An effect at angle orders (the kinematic error) is planted at the one order
 its Size states, in a free slot, and the calibrated terms of eq. (7) join
 what calibration takes: over a short travel, link order 1 takes most of a
-link order 2 (the independent truth's, 4e-5 rad, came out `consistent` on
-a multisine and on a sweep). It shows when the diagnosis's order search,
+link order 2. It shows when the diagnosis's order search,
 run on the residual with what is left of it, finds an order of its angle
 and the test above passes; or when calibration would move a term of eq.
 (7) from within its tolerance to beyond it (the diagnosis reports that
@@ -153,10 +153,8 @@ def planted_gains(base: np.ndarray, left: np.ndarray, fold: np.ndarray, test: np
     sign hidden there adds to it, as a real one would), and on its own (as
     if independent of the residual). The effect shows only if it passes the
     test with the first and explains over MIN_GAIN with the second: with the
-    first alone, on the independent truth's paper run a Dahl loop of 0.0004
-    N.m "showed", its whole gain its cross term with a missed Bouc-Wen loop
-    of 0.32 N.m (docs/diagnosis_measurements.md, "A loop that switches
-    within an encoder count")."""
+    first alone, a negligible planting would "show" through its cross term
+    with a larger effect the residual already hides."""
     after = np.sum(base ** 2, axis=0)
     return (held_out_gain_sq(np.sum((base + left) ** 2, axis=0), after, fold, test),
             held_out_gain_sq(after + np.sum(left ** 2, axis=0), after, fold, test))
@@ -228,11 +226,10 @@ class _Planting:
     def _order_found(self, left: np.ndarray) -> bool:
         """The diagnosis's order search, run on the residual with the ripple
         left in, finds an order of its angle (the effect is then tested
-        there). Without this gate a ripple of link order 2 showed from 6e-7
-        rad on the independent truth's sweep, where one of 3.6e-5 rad went
-        unfound: over a fraction of a period the search reads slow structure
-        along the angle, beside a polynomial trend, and only when it is most
-        of the residual."""
+        there). Without this gate a planted ripple would show at sizes far
+        below what the diagnosis finds: over a fraction of a period the
+        search reads slow structure along the angle, beside a polynomial
+        trend, and only when it is most of the residual."""
         d, angle = self.search, self.at[0]
         added = {c.name: left[i] * d.objective.noise_scale(c, self.p) for i, c in enumerate(self.channels)}
         found = d.order_search(self.p, self.effect.part, self.channels, (angle,), added=added).found
@@ -244,10 +241,8 @@ def _moved(search, effect: Effect, p: dict) -> bool:
     route by which a resized term shows the effect is then closed, and what
     the term took cannot be told from the ripple: no limit is claimed. Where
     the move is needed held out the diagnosis says so (a resized finding, or
-    unexplained structure when the travel does not resolve the harmonic):
-    without a torque sensor on the independent truth's multisine bl1 went to
-    -18 tolerances, and a limit beside that said that a ripple of 1 arcmin
-    would not show."""
+    unexplained structure when the travel does not resolve the harmonic),
+    and a limit beside it would contradict that move."""
     return any(_tolerances(search, n, p[n]) > RESIZE_Z
                for n in effect.resizes if n in search.objective.priors and n in search.objective.calibrated_names)
 

@@ -117,7 +117,7 @@ def fit_figures(diag, finding) -> dict:
 def remaining_structure(diag, p) -> list[dict]:
     """Held-out structure left in every channel after the accepted findings:
     binned-mean scans over regime features, each a location tested. A scan
-    large enough to matter (held-out gain > 2 %, z > 4) gets a p-value from
+    large enough to matter (over LOCATED_GAIN held out, z over LOCATED_Z) gets a p-value from
     the simulated null (significance.py; the bins are its regressors);
     Benjamini-Hochberg runs over every scan of every channel (the others
     count with p = 1, which only makes the correction stricter)."""

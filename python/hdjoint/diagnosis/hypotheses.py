@@ -74,7 +74,7 @@ class Hypothesis:
     def unconfirmed(self) -> bool:
         """Explains most of the held-out residual on every other count, but the
         simulated null cannot tell it from the residual's own colour: a residual
-        made of one slow swing (the LARA8 link channel, 100 N.m over 4 s) makes
+        made of one slow swing (a link channel's gravity the nominal set lacks) makes
         every smooth hypothesis look like noise. Not a finding, not consistent either."""
         return self.p_value > FALSE_DISCOVERY_RATE and self.gain.gain >= UNCONFIRMED_GAIN and self._held_out_evidence()
 
@@ -93,12 +93,12 @@ class Hypothesis:
         return self.worst_channel_ratio if self.pooled_ratio is None else self.pooled_ratio
 
     def _steady_over_folds(self) -> bool:
-        """A stationary effect helps most held-out folds, by z > 3 over them. An
+        """A stationary effect helps most held-out folds (rules.steady_over_folds). An
         effect uneven over the folds by nature (Effect.uneven_over_folds: a
         drift, a dead zone) is judged by its pooled gain against the
         simulated null, which is its p-value restated, so the p-value alone
-        decides (docs/diagnosis_measurements.md, "Thermal drift of Kt: the law
-        and its test" and "Reversals judged pooled", for the false alarms this gives on controls)."""
+        decides (benchmarks/false_alarms.py measures the false alarms this
+        gives on controls)."""
         if self.z_against_null is not None:
             return True
         return steady_over_folds(self.gain)

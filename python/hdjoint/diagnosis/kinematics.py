@@ -32,8 +32,8 @@ class Kinematics:
 # and the smoothed torque obey the same linear equation as the joint. A
 # Gaussian's derivative filters are the derivatives of its smoothing filter;
 # a Savitzky-Golay derivative is a different local fit, which near the
-# joint's torsional mode reads as 30 % more inertia and a 2 ms current delay
-# (measured on simulated joints where neither is there).
+# joint's torsional mode reads as extra inertia and a current delay that the
+# joint does not have.
 _TRUNCATE = 4.0  # kernel half-width in standard deviations
 
 

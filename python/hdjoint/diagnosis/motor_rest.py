@@ -2,28 +2,23 @@
 
 At rest the motor's friction is static: it takes whatever the drive pushes
 against it, up to breakaway, and keeps it until the motor slides again. No
-law of speed can say what it is there (the nominal tanh law says 0). On a
-sweep with dwells (the independent truth's `sweep`: 1.5 s held after every
-3 s move) a joint with bristle friction (LuGre) holds its last sliding
-friction, +-Fc, through each dwell while the controller's integrator winds
-against it: N*Fc = 1.5 N.m of motor-channel residual for a third of the
-recording. Calibration then moved Jm to 2.3-4x and Kt to 0.7-0.8x on every
-LuGre sweep, controls included, and no hypothesis of the motor's part
-could be confirmed over it. The same truths with a tanh law do not move
-them (docs/diagnosis_measurements.md, "Sweeps: the motor at rest").
+law of speed can say what it is there (the nominal tanh law says 0). A
+joint with bristle friction (LuGre) holds its last sliding friction, +-Fc,
+through a dwell while the controller's integrator winds against it: the
+motor channel's residual then carries N*Fc for as long as the motor rests,
+calibration bends Jm and Kt to it, and no hypothesis of the motor's part
+can be confirmed over it (benchmarks/sweep_calibration.py measures what
+calibration makes of sweeps with dwells).
 
 So a channel with the motor's estimate compares nothing where the motor
 rests (its residual there is 0 before and after every hypothesis), widened
 by the smoothing filter's reach, through which the motor estimate sees the
-rest. A swing through zero speed is not a rest: a 0.25 Hz swing of the
-smallest amplitude the benchmark draws spends about 0.1 s below REST_SPEED
-(more where the motor sticks at the reversal), a dwell 1.5 s; with
-REST_FOR at 0.1 s such reversals were masked on the paper excitation and
-the time delay case of seed 0 lost evidence.
-A slow run cut by a window's end is a rest however short: the benchmark's
-30 s sweep ends as its last move stops, where the tanh truth's friction
-held on while the model's let go (0.67 N.m in the last 60 ms), and a
-thermal drift fitted that one fold (22.7 % of the held-out residual).
+rest. A swing through zero speed is not a rest: it passes below REST_SPEED
+in less than REST_FOR, a dwell does not; a shorter REST_FOR would mask the
+reversals of an ordinary excitation and take evidence from effects that
+show there. A slow run cut by a window's end is a rest however short: the
+model's friction and the joint's can disagree there, and a fit of one fold
+would read it as structure.
 """
 from __future__ import annotations
 

@@ -3,9 +3,8 @@
 A parameter fitted on a recording is only known where that recording went:
 friction at the speeds it reached, stiffness at the torques it applied,
 gravity at the link angles it visited. A recording of the same joint that
-goes elsewhere tests the model's form there, not its fit. On LARA8 joint3,
-fitted on a first half that stands still, the second half's residual got
-twelve times worse: that is extrapolation, and it must read as such.
+goes elsewhere tests the model's form there, not its fit: a residual that
+grows there is extrapolation, and it must read as such.
 
 The fitted range is the central 99 % of the fitted recording's analysed
 samples (so a few spikes do not widen it; 1 % of the fitted recording itself

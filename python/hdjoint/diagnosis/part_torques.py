@@ -96,9 +96,8 @@ def _get(p: dict, name: str) -> float:
 # estimator has none) acts on the rate of the torsion less the kinematic
 # error. That rate lives at the torsional mode (about 50 Hz), which the 6 ms
 # kinematics filter passes at 13 %: it is differentiated through a Gaussian
-# of 2.5 samples at 1 kHz instead. On the independent truth's paper
-# recordings this term (Df = 2-8 N.m.s/rad) is 0.12 N.m RMS, most of the
-# transmission residual (0.15 N.m) when the model leaves it out.
+# of 2.5 samples at 1 kHz instead. Where the plant has Df and the model
+# leaves it out, this term can be most of the transmission residual.
 TORSION_RATE_SIGMA = 0.0015  # s
 
 
@@ -118,9 +117,8 @@ class _TorsionBasis:
     """The torsion less the kinematic error as base - amplitudes . columns, for
     one shape (KINEMATIC_SHAPE): as itself, its part above the transmission's
     filter, and its rate through that filter (VIEWS). A fit moves the
-    amplitudes (a0 alone in 646 of the 936 recomputations of a 58 s
-    recording's diagnosis, profiled), and each recomputation had run the
-    compliance model and two filters over the whole run. a0 is an offset,
+    amplitudes (a0 most often), and recomputing would run the compliance
+    model and two filters over the whole run each time. a0 is an offset,
     which neither filtered view sees."""
     shape: tuple
     base: dict  # view -> the torsion with every amplitude 0
@@ -166,9 +164,9 @@ def _geometric_torsion(prep: Prepared, p: dict) -> tuple[np.ndarray, np.ndarray]
     """The torsion less the kinematic error (and before the wave generator's
     share, as the plant damps it), over the whole run: its part above the
     transmission's filter, and its rate through that filter. Recomputed
-    only when the geometry changes: keyed on everything, it ran the compliance
-    model over the whole run for every Jacobian column of Kf, Cf, Kt, ...
-    (1794 times, 32 of 57 s of a 58 s recording's diagnosis, profiled)."""
+    only when the geometry changes: keyed on everything, it would run the
+    compliance model over the whole run for every Jacobian column of Kf,
+    Cf, Kt, ..., most of a diagnosis's time."""
     key = tuple(_get(p, n) for n in GEOMETRY_PARAMETERS if n != "a0")
     if prep._torsion is None or prep._torsion[0] != key:
         basis = _torsion_basis(prep, p)
@@ -191,13 +189,12 @@ def sharp_transmission(prep: Prepared) -> bool:
     torque sensor it is compared sample by sample, and its damping term can
     only be seen through that filter. A cogging torque shakes the torsion at
     6 omega_m (30-100 Hz), where the filter passes 30-90 % of the rate: the
-    damping torque lost there is periodic in the motor angle, and on the
-    independent truth's constant-speed runs the kinematic error's order 6
-    took it (1e-6 rad, p 4e-5, on a joint without one). The sensor goes
+    damping torque lost there is periodic in the motor angle, and the
+    kinematic error's order 6 would take it on a joint without one. The sensor goes
     through the same filter (Evaluator.reference), and so does the
     compliance model: its inputs (the torsion's high-pass part taken off
     the link angle, and the current), which the stiffness law passes
-    linearly at that amplitude (1e-6 rad), so it runs only where the fit
+    linearly at so small an amplitude, so it runs only where the fit
     looks. Without a sensor tau_T is the reference of parts seen through
     the kinematics' 6 ms filter, which takes the same band away."""
     return prep.has_sensor
@@ -212,9 +209,9 @@ def tau_transmission(prep: Prepared, p: dict[str, float], index: np.ndarray | No
     through the wave generator's torque), and the compliance model runs with
     no delay line. (The estimator's delay line pairs each current with the
     angles i_delay earlier, so its output lags by i_delay: compared with a
-    torque sensor sampled with the encoders, that lag put a 2 ms delay's
-    worth of error into the transmission channel, which Kf, Cf and eq. (7)
-    then absorbed; a time delay's corrected set failed on the next recording.)
+    torque sensor sampled with the encoders, that lag would put a delay's
+    worth of error into the transmission channel for Kf, Cf and eq. (7) to
+    absorb, and a time delay's corrected set would fail on another recording.)
 
     With `index`, only those samples (and only when the model is stateless
     there: no hysteresis; otherwise the whole run, then indexed). `sharp`:
@@ -230,12 +227,11 @@ def hysteresis_torque(prep: Prepared, p: dict, sharp: bool = False) -> np.ndarra
     """The Dahl hysteresis torque of the compliance model (C++), driven by the
     torsion the compliance model sees (_compliance_inputs): through the
     transmission's filter against a torque sensor, else through the
-    kinematics' smoothing. A loop of 0.3 N.m switches over H/sigma = 3e-6 rad,
-    so it flips with the torsional vibration: on the independent truth
-    (hysteresis at 4x, seed 0) the truth's loop torque is 0.87 correlated with
-    the transmission residual, and the modelled loop driven through the 6 ms
-    smoothing, which takes that vibration away, was not correlated with it
-    (-0.02); through the transmission's filter, 0.54."""
+    kinematics' smoothing. A loop switches over a torsion of H/sigma, a
+    small fraction of an encoder count, so it flips with the torsional
+    vibration: a modelled loop driven through the 6 ms smoothing, which
+    takes that vibration away, does not follow the joint's loop; driven
+    through the transmission's filter, it does."""
     native = parameters.for_estimator(dict(p, i_delay=0.0))
     current, theta_m, theta_l = _compliance_inputs(prep, p, sharp)
     if not sharp:
@@ -288,11 +284,10 @@ def smoothed_friction(prep: Prepared, p: dict) -> np.ndarray:
     filter: the law on the encoders' speed, then smoothed. Friction switches
     within a fraction of a millisecond at a reversal; its smoothed value is a
     step blurred over the filter there, while the law alone switches as
-    sharply as it does. On a 3 Hz chirp that difference was 0.2 N.m RMS in
-    tau_M (ten times the noise floor). (The law on a sharper, 2.5-sample
-    speed was closer on the chirp, but while the motor creeps below a count
-    per window that speed is quantisation, which a Stribeck term at
-    omega_s = 0.006 rad/s then fitted.)"""
+    sharply as it does; on a fast excitation that difference stands well
+    above the noise in tau_M. (The law on a sharper speed would not do:
+    while the motor creeps below a count per window that speed is
+    quantisation, which a Stribeck term with a tiny omega_s would fit.)"""
     key = tuple(_get(p, n) for n in friction_law_parameters())
     if prep._friction is None or prep._friction[0] != key:
         law = motor_friction(p, prep.kin.omega_m, prep.t_rel)
@@ -340,12 +335,12 @@ def _smoothed_current(prep: Prepared, delay: float) -> np.ndarray:
 
     It is the smoothing filter's derivative of the charge, not the smoothed
     samples: a drive's current can alternate from sample to sample (a
-    limit cycle of its speed loop on a quantised encoder, 0.5 A on the
-    independent truth's sweeps), and where the samples' time stamps jitter,
+    limit cycle of its speed loop on a quantised encoder), and where the
+    samples' time stamps jitter,
     interpolating that alternation onto the filter's uniform grid aliases it
     into the band the filter passes, correlated with the jitter the loop
-    reacts to. It read as a 0.34 ms current delay (p 1.5e-5) on a control
-    with 118 us of jitter, 1.1 ms at 400 us. The charge integrates the
+    reacts to: it would read as a current delay that grows with the
+    jitter. The charge integrates the
     alternation away, and d/dt of the smoothed charge is the smoothed
     current wherever the current is smooth."""
     shift = delay + prep.current_shift

@@ -62,9 +62,8 @@ def unresolved_harmonics(rec: Recording, p: dict) -> dict[str, str]:
     """eq. (7) coefficients whose harmonic the recording's travel does not
     resolve (structure.resolves), each with why. Over a fraction of a
     period a harmonic's cosine and sine are two smooth curves that take
-    whatever else changes along the travel: on an independent truth's
-    sweep with 1.6 rad of link travel a Bouc-Wen loop four times its
-    size moved bl1 to -14 times nominal, needed held out (24 %)."""
+    whatever else changes along the travel (a hysteresis loop, say), and
+    move far from nominal with held-out support."""
     out = {}
     for angle, terms in eq7_terms(p).items():
         travel = float(np.ptp(getattr(rec, angle)))

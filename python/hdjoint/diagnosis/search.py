@@ -61,9 +61,9 @@ class HypothesisSearch:
                      added: dict[str, np.ndarray] | None = None) -> OrderSearch:
         """Orders of `angles` the residuals of `channels` carry, strongest first
         (orders the nominal model already has at that angle excluded). Every
-        channel of the part is searched: on LARA8 the kinematic error is most
-        of the link channel's residual (0.7 N.m) and 5 % of the motor
-        channel's (14 N.m of motor-side mismatch, broadband in the angle).
+        channel of the part is searched: a kinematic error can be most of one
+        channel's residual and a small share of another's, where other
+        mismatch broadband in the angle dominates.
         `added`: a residual added to each named channel's (an effect planted
         by detection_limit.py). Returns what passed, and every order tried
         (for saying why none passed)."""
@@ -81,7 +81,7 @@ class HypothesisSearch:
                                unresolved_trend(values, angle, through))
         for channel in channels:
             # Not the fit's residual, 0 where the channel is blind: a ripple's
-            # prediction there counted as error (and a fold of rest, 0/0, as -1e295).
+            # prediction there would count as error (and a fold of rest, 0/0, as a huge loss).
             r = self.objective.shown_residual(channel, p) + added.get(channel.name, 0.0)
             for angle, (values, through, orders, trend) in searched.items():
                 seen = []
@@ -100,9 +100,8 @@ class HypothesisSearch:
         travel does not resolve, in the channel it explains best, when it
         explains more than UNRESOLVED_GAIN there held out. The circular
         spline's run-out sits at the lowest link orders; a link that turns a
-        fraction of a revolution shows it as slow structure along its angle
-        (the independent truth's link order 2 over 0.38 revolutions: 24 % of
-        the held-out transmission residual, left `unexplained`). It is tried
+        fraction of a revolution shows it as slow structure along its angle,
+        which would otherwise be left `unexplained`. It is tried
         as that order and judged pooled (structure.unresolved_order). Returns
         it (or nothing) and every channel's try."""
         order = lowest_unresolved_order(self.objective.rec.theta_l, "theta_l", existing)
@@ -182,12 +181,10 @@ class HypothesisSearch:
         """The torque the torsion is regressed on (its nuisance), as columns:
         without a sensor, the motor's estimate at both ends of the current
         alignment's interval when the recording leaves it open (a shift
-        between them is nearly a mix of the two). On LARA8 joint2 the
-        alignment sits anywhere in [-2, 0] ms; as it moved from -0.3 to -2.0
-        ms (the channels smoothed alike), the motor estimate moved by up to
-        0.67 N.m where the motor stops, and the torsion's order 2 went from
-        z 5.1 to 2.9 at the same 69 % held out. Spanning the interval: z 5.9
-        either way."""
+        between them is nearly a mix of the two). Where the recording leaves
+        the alignment open, the motor estimate moves with it where the motor
+        stops, and an order's z with it; spanning the interval makes the
+        test independent of where in it the alignment sits."""
         alignment = self.current_alignment
         if self.objective.has_sensor or alignment is None or alignment["hi"] - alignment["lo"] <= 0.0:
             return np.nan_to_num(self.objective.reference_torque(p))
@@ -199,10 +196,9 @@ class HypothesisSearch:
                        after: np.ndarray) -> str | None:
         """Why a hypothesis's gain is not its own, or None: with its terms back
         at `p`'s values and the part's refitted parameters kept, the fit must
-        predict held-out data worse by more than MIN_GAIN. On LARA8 joint1_jog
-        (no torque sensor) a Dahl loop of 0.023 N.m, its interval spanning
-        0, came with Kf refitted from 21500 to 9100 N.m/rad; without the loop
-        the refitted set kept its whole held-out gain (56 %)."""
+        predict held-out data worse by more than MIN_GAIN: otherwise the gain
+        comes from the refitted parameters (a softer Kf, say) and a negligible
+        term of the effect rides along."""
         without = dict(fitted, **{n: p[n] for n in names})
         own = held_out_gain_sq(self.objective.squared(without, channels), after, self.objective.fold, self.objective.test)
         if own.gain > MIN_GAIN:
@@ -216,9 +212,9 @@ class HypothesisSearch:
         judged on the encoders' torsion less the model's own kinematic error
         (torsion_orders.py), Benjamini-Hochberg over every order tried. Without
         a sensor the torque channels compare the transmission with the motor
-        and link models, whose own mismatch buries a kinematic ripple: on LARA8
-        joint 2 order 2 (6e-5 rad, 1.9 N.m at K1) lay under 14 N.m of
-        motor-side mismatch and 115 N.m of gravity the 4 s jog cannot confirm."""
+        and link models, whose own mismatch (motor-side, and gravity a short
+        recording cannot confirm) buries a kinematic ripple
+        (benchmarks/torsion_view.py measures this test)."""
         torsion = torsion_less_kinematic(self.objective.prep, p)
         nuisance = torsion_nuisances(self.torsion_torque(p), self.objective.rec.theta_l)
         tried, passing = self.torsion_orders(effect, p, torsion, nuisance, effect.order_angles)
@@ -240,8 +236,8 @@ class HypothesisSearch:
         # at high load into a shift of the mean torque), and then the torque views together must
         # not predict held-out data worse, as they would for a torsion ripple the gear really
         # transmits as torque (a cogging ripple), which the motor or link model then misses.
-        # Pooled, as every hypothesis's gain pools them: on LARA8 joint 2 the motor view's held-out
-        # error fell 33 % while the link view's, 117 N.m of gravity the nominal set lacks, rose 2.8 %.
+        # Pooled, as every hypothesis's gain pools them: one view's error can fall while another's,
+        # carrying a mismatch such as gravity the nominal set lacks, rises slightly.
         trial = self.objective.fit(trial, self.objective.anchors(effect.part), channels, ftol=HYPOTHESIS_FTOL).params
         pooled = float(np.nanmean(self.objective.squared(trial, channels)[self.objective.test]) /
                        max(np.nanmean(self.objective.squared(p, channels)[self.objective.test]), 1e-300))

@@ -20,7 +20,7 @@ enough to run for every hypothesis.
   - p: the observed z against a normal fitted to the replicates' z
     (`REPLICATES` of them; the tail beyond the largest replicate is the
     normal's, so p-values below 1/REPLICATES are still graded).
-The false-alarm rate this gives is measured on controls (docs/diagnosis_measurements.md).
+benchmarks/false_alarms.py measures the false-alarm rate this gives on controls.
 """
 from __future__ import annotations
 

@@ -46,9 +46,9 @@ def fold_z(relative: np.ndarray) -> float:
 def relative_fold_gains(before: np.ndarray, after: np.ndarray) -> np.ndarray:
     """(before - after) / before per fold; NaN for a fold that compares
     nothing (before = 0: a channel blind there, as the motor's at rest), which
-    says nothing either way. Counted as gains of 0 such folds capped the z of
-    a motor effect and its share of improved folds (13 of 20 at most on the
-    sweep with dwells, where 7 of 20 held-out folds rest)."""
+    says nothing either way. Counted as gains of 0, such folds would cap the
+    z of a motor effect and its share of improved folds on a recording whose
+    motor rests in many folds."""
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where(before > 0, (before - after) / np.where(before > 0, before, 1.0), np.nan)
 
@@ -178,9 +178,8 @@ def unresolved_trend(values: np.ndarray, angle: str, through=None) -> np.ndarray
     `angle` over its travel, when the travel leaves some of the grid's orders
     unresolved (None otherwise). An order is fitted beside them: over a short
     travel a low order's ripple, one the search cannot resolve, leaks into the
-    lowest orders it can. On the independent truth every significant link
-    order found without them was one the truth lacks (its link order 2, over
-    1.3-2.4 rad, read as orders 4-9: docs/results/order_gate_scan.md)."""
+    lowest orders it can, where it would be found as an order the joint lacks
+    (benchmarks/order_gate_scan.py measures the order search's gates)."""
     lo, hi = float(np.min(values)), float(np.max(values))
     if all(resolves(k, hi - lo) for k in _order_grid(angle)) or hi <= lo:
         return None
@@ -251,9 +250,9 @@ OFF_ORDERS = (-0.27, 0.23, 0.31)
 def _off_order_stretch(angle) -> float:
     """How far the off-orders must move out so each lies beyond the order's own
     main lobe (1.1 / revolutions): a least-squares fit at k + d of a ripple at k
-    over R revolutions picks up sinc(d R) of it. On LARA8 joint1_jog (2.6 motor
-    revolutions) the quarter-order off-orders sat inside the lobe: a pure ripple
-    there would have shown a prominence near 1, read as broadband."""
+    over R revolutions picks up sinc(d R) of it. Over a few revolutions the
+    quarter-order off-orders sit inside the lobe: a pure ripple would show a
+    prominence near 1 and read as broadband."""
     revolutions = max(float(np.ptp(angle)) / (2 * np.pi), 1e-9)
     return max(1.0, 1.1 / (min(abs(d) for d in OFF_ORDERS) * revolutions))
 
@@ -288,8 +287,8 @@ def order_search(angle, residual, fold, train, test, orders, exclude=(), name="t
         pred, amp = coef[:2] @ basis[:2], float(np.hypot(coef[0], coef[1]))
         # The floor is read off what the order leaves: a strong ripple's own
         # leakage into its off-orders (a sweep visits its angles unevenly) is
-        # not broadband structure. With it, cogging on the sweep, z = 7.1 and
-        # 68 % of the held-out motor residual, stood 2.8 times over its floor.
+        # not broadband structure. Left in, it would hold even a strong ripple
+        # under ORDER_PROMINENCE.
         rest = np.where(ok, res - pred, 0.0)
         floor = np.median([np.hypot(*_floor_coefficients(angle, k + d, through, rest, floor_rows, trend)[:2])
                            for d in offsets])

@@ -2,11 +2,11 @@
 
 Without a torque sensor, the transmission's torque is compared with what the
 motor model makes of the current and what the link model makes of the link's
-motion. A kinematic-error ripple of 1 N.m at the flexspline's stiffness then
-sits under whatever either model lacks: on LARA8 joint 2, 14 N.m of
-motor-side mismatch and 115 N.m of gravity the short jog cannot confirm
-(docs/diagnosis_lara8.md). The torsion theta_m/N - theta_l, less the model's
-own kinematic error, needs neither model. It is regressed on nuisances every
+motion. A kinematic-error ripple, small at the flexspline's stiffness, then
+sits under whatever either model lacks: motor-side mismatch, or gravity a
+short recording cannot confirm (docs/diagnosis_lara8.md). The torsion
+theta_m/N - theta_l, less the model's own kinematic error, needs neither
+model. It is regressed on nuisances every
 recording has: a constant (the encoder zero), the reference torque (the
 flexspline's twist, whatever its stiffness) and the link angle (gravity,
 drift and link orders a short travel cannot tell apart). Each candidate order

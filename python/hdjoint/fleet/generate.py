@@ -24,7 +24,7 @@ class Drift:
 
 # 10 %/day: +50 % over the six days, beyond Fc's 30 % tolerance, which is
 # what the diagnosis's priors and the fleet's relevance rule ask of a drift
-# worth servicing (at 4 %/day, +20 %, the MAP fit shares it with Stribeck).
+# worth servicing (a drift within the tolerance the MAP fit may share with Stribeck).
 FC_GROWTH = Drift(("Fc",), 0.10, "coulomb_friction")
 KINEMATIC_GROWTH = Drift(KINEMATIC_EQ7, 0.15, "kinematic_error")
 # Joint id -> its drift (None: none). Joints beyond these have none.

@@ -8,8 +8,8 @@ that are too narrow or too wide by a common factor do not change the
 false-alarm rate), two-sided, n-2 degrees of freedom. A joint's drift
 p-value is the smallest of its quantities' p-values times their number
 (Bonferroni), so a joint without drift is flagged with probability at most
-ALPHA whatever the number of quantities. The measured false-alarm rate is
-in docs/fleet.md (benchmarks/bench_fleet_trend.py).
+ALPHA whatever the number of quantities. benchmarks/bench_fleet.py measures
+the false-alarm rate (docs/results/fleet.md).
 """
 from __future__ import annotations
 

@@ -8,9 +8,9 @@ class Backlash(Effect):
     def degenerate(self, p: dict, torsion_span: float) -> str | None:
         """A dead zone at least half as wide as the recorded torsion leaves the
         transmission carrying no torque over most of the recording: not lost
-        motion, a transmission blinded to whatever it failed to explain (on
-        LARA8 joint1_jog a dead zone took the torsion, mostly kinematic error,
-        and eq. (7) then came back at exactly its nominal value)."""
+        motion, a transmission blinded to whatever it failed to explain (a
+        dead zone can swallow torsion that is kinematic error, leaving eq.
+        (7) at its nominal value)."""
         if p["backlash"] < 0.5 * torsion_span:
             return None
         return (f"the fitted dead zone ({p['backlash']:.2g} rad) is at least half the recorded torsion "

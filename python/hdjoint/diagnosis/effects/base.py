@@ -66,7 +66,7 @@ class Effect:
     revealed_by: str = ""         # the excitation that shows this effect and not its look-alikes
     # Its state runs through time, so every fit evaluation simulates the whole
     # recording: it is refitted with the part's always-calibrated parameters
-    # only, not with everything calibration touched (2.5x fewer evaluations).
+    # only, not with everything calibration touched (far fewer evaluations).
     stateful: bool = False
     # Shape parameters of the law, calibrated (not hypothesised) when the nominal set has the effect on.
     shape: tuple[str, ...] = ()

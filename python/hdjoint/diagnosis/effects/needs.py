@@ -15,9 +15,9 @@ from scipy.stats import spearmanr
 # of 5 % of the torque span, for a dead zone around zero load to be visited.
 THROUGH_ZERO_SHARE = 0.01
 # Windows over which the motion's frequency is read, and the rank correlation
-# with time above which it rises (or falls) with time. On the independent
-# truth's recordings (docs/benchmarks.md) every chirp reads 1.00 and every
-# other excitation (paper, multisine, sweep, constant speeds) at most 0.52.
+# with time above which it rises (or falls) with time: a chirp's frequency
+# follows time closely, the other excitations' (paper, multisine, sweep,
+# constant speeds) does not.
 FREQUENCY_WINDOW_S = 2.0
 FREQUENCY_FOLLOWS_TIME = 0.9
 
@@ -136,8 +136,8 @@ def _duration(v: RecordingView):
 @need("spectrum_steady_in_time")
 def _spectrum_steady_in_time(v: RecordingView):
     # On a chirp time is frequency: a drift over the run cannot be told from a
-    # mismatch that grows with frequency (LuGre's bristles against a static
-    # friction law took thermal_drift on the independent truth's chirp controls).
+    # mismatch that grows with frequency (a dynamic friction law's mismatch
+    # against a static one can pass for thermal_drift).
     if not abs(frequency_time_correlation(v.kin, v.rec.time)) < FREQUENCY_FOLLOWS_TIME:
         return ("the motion's frequency rises or falls steadily over the run (a chirp): "
                 "a drift cannot be told from a mismatch that grows with frequency")

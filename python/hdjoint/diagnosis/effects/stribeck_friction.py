@@ -5,16 +5,15 @@ Stribeck rise is a steady law: the extra friction stays while the speed is
 held in its range (0.5-20 rad/s). A sharper smoothing of the Coulomb law, or
 a bristle model (LuGre: the bristles' damping acts while they deflect),
 changes friction only while the speed passes through zero: at a speed held
-away from it the friction is Fc again. The independent truth's LuGre joints
-show it: a Stribeck fit explains 19-20 % of their held-out motor residual
-(p ~ 1e-9) on recordings whose speed is never held.
+away from it the friction is Fc again. Yet on a recording whose speed is
+never held, a Stribeck fit explains such a joint's residual as well.
 
 The C++ friction law has no bristle state, so that look-alike is not fitted
 on its own. It is judged on the Stribeck fit's own structure: Stribeck is
 told apart from it only by its held-out gain where the speed is held
 (`held_speed`). Without that evidence the two are one ambiguous finding,
 each with the share of the held-out gain it can claim. (A fit with omega_s
-below omega_fc never gets here: it is degenerate, `StribeckFriction.degenerate`; the LuGre fits above were of that kind.)"""
+below omega_fc never gets here: it is degenerate, `StribeckFriction.degenerate`.)"""
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
