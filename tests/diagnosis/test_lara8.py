@@ -80,7 +80,7 @@ def test_the_two_lobe_error_a_nominal_set_lacks_is_added_from_the_encoders_torsi
     interval, and the report says where it was seen. The torsion's torque
     nuisance spans the current alignment's interval ([-2, 0] ms here): with
     the motor estimate at one alignment inside it, the evidence hung on it
-    (z 5.1 at -0.3 ms, 2.9 at -2.0 ms; Diagnosis.torsion_torque)."""
+    (z 5.1 at -0.3 ms, 2.9 at -2.0 ms; HypothesisSearch.torsion_torque)."""
     from hdjoint.jobs.diagnose import diagnose_to_directory
     from hdjoint.io.recording import write_recording
     write_recording(tmp_path / "joint2.csv", lara8_table.read_joint(DATA / "joint2_jog_joint_mass.csv"))
@@ -195,7 +195,7 @@ def test_a_loop_whose_gain_the_refitted_stiffness_keeps_is_not_hysteresis():
     came with Kf refitted from 21500 to 9100 N.m/rad and 56 % held out, and
     was accepted (and Kf then reported resized). With the loop taken out and
     the refitted stiffness kept, the fit keeps its whole gain: the gain is
-    the stiffness's (Diagnosis._borrowed_gain), not hysteresis."""
+    the stiffness's (HypothesisSearch.borrowed_gain), not hysteresis."""
     rec = lara8_table.read_joint(DATA / "joint1_jog.csv")
     _, doc = diagnose(rec, lara8_table.nominal_for(lara8_table.TOOTH_RATIO["joint1"]))
     assert "hysteresis" not in {f["effect"] for f in doc["findings"]}

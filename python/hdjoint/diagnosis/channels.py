@@ -19,7 +19,7 @@ class Channel:
     name: str
     reference: str  # "sensor" or a part
     part: str       # the part whose estimate is subtracted
-    # The parameter the channel's noise scales with (Diagnosis.noise_scale),
+    # The parameter the channel's noise scales with (Objective.noise_scale),
     # when neither side is tied to a measured torque (a sensor, the current).
     scales_with: str | None = None
 

@@ -33,7 +33,7 @@ run on the residual with what is left of it, finds an order of its angle
 and the test above passes; or when calibration would move a term of eq.
 (7) from within its tolerance to beyond it (the diagnosis reports that
 move). Without a torque sensor the orders are judged on the encoders'
-torsion, as the diagnosis judges them (Diagnosis.torsion_orders).
+torsion, as the diagnosis judges them (HypothesisSearch.torsion_orders).
 
 The smallest such size (searched from the reference down or up by factors
 of 2 over 2^-10 .. 2^10, refined to 2^(1/4)) is the recording's detection limit for that effect. Idealised: the

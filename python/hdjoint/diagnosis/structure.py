@@ -206,7 +206,7 @@ def unresolved_order(values, residual, fold, train, test, order: float, name: st
     of the angle, so its gain is that of slow structure along the angle,
     whatever its true low order. Fold by fold such structure is as uneven as
     the angle's visits to each place: it is judged pooled against the
-    simulated null (Diagnosis._try), never by its folds or its spectrum."""
+    simulated null (HypothesisSearch.try_effect), never by its folds or its spectrum."""
     ok = np.isfinite(residual)
     res = np.where(ok, residual, 0.0)
     basis = _basis(values, order, None)

@@ -2,7 +2,7 @@
 effect in this folder, each defining `EFFECT` (an instance of base.Effect or
 of a subclass that overrides its special cases). The registry finds them
 itself, so a new effect is one file; `register` adds one at run time (a
-test's, a user's plug-in). The engine reads effects through this registry
+test's, a user's plug-in). The stages read effects through this registry
 and the base class's hooks only.
 
 Also here: the parameters calibrated whenever a part of the model is

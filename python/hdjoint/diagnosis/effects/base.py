@@ -2,8 +2,8 @@
 instantiates): what part of the joint it lives in, which parameters of the
 C++ model carry it, how a fit of it starts, what a recording must show for
 it to be testable, its look-alikes, and hooks with the usual behaviour that
-an effect overrides for its special cases. The engine calls only these; it
-never names an effect."""
+an effect overrides for its special cases. The stages call only these; they
+never name an effect."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -84,7 +84,7 @@ class Effect:
     # (torsion_orders.py), not on torque channels that carry the motor and link models' mismatch.
     seen_on_torsion: bool = False
     # Its gain must be its own: with its terms back off and the part's refitted
-    # parameters kept, the fit must lose held-out gain (Diagnosis.borrowed_gain).
+    # parameters kept, the fit must lose held-out gain (HypothesisSearch.borrowed_gain).
     own_gain_checked: bool = False
     # Its parameters enter the motor friction law (friction.h): they key that law's cache.
     in_friction_law: bool = False
@@ -109,12 +109,12 @@ class Effect:
         """Why a fit is not this effect (fitted parameters, the recording's torsion span in rad), or None."""
         return None
 
-    def settle(self, finding, engine):
+    def settle(self, finding, objective):
         """An accepted finding of this effect, told apart from a look-alike the
         library cannot fit (or made ambiguous with it). Usual: as it is."""
         return finding
 
-    def in_the_estimator(self, engine, params: dict) -> dict | None:
+    def in_the_estimator(self, objective, params: dict) -> dict | None:
         """How the fitted effect does in the estimator FMU, when that differs from the diagnosis's view."""
         return None
 

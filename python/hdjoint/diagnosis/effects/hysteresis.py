@@ -35,19 +35,19 @@ class Hysteresis(Effect):
                     f"torsion spans ({p['Kf'] * torsion_span:.3g} N.m): its gain is the refitted stiffness's, not a loop")
         return _loop_that_never_closes(p, torsion_span)
 
-    def in_the_estimator(self, engine, params: dict) -> dict | None:
+    def in_the_estimator(self, objective, params: dict) -> dict | None:
         """The fitted loop as the estimator FMU runs it: its compliance model
         (C++, with its own delay line) on the raw recorded current and encoder
         angles, where the diagnosis (against a sensor) drives the loop with the
         torsion through the transmission's filter. The compliance torque's
         held-out error against the sensor without and with the loop."""
-        if not engine.has_sensor or not params.get("hys_H", 0.0) > 0.0:
+        if not objective.has_sensor or not params.get("hys_H", 0.0) > 0.0:
             return None
-        rec, rows = engine.rec, engine.test & np.isfinite(engine.rec.tau_sensor)
+        rec, rows = objective.rec, objective.test & np.isfinite(objective.rec.tau_sensor)
 
         def held_out_rms(p) -> float:
             native = parameters.for_estimator(p)
-            torque = engine.prep.per_window(lambda i, tm, tl: _core.compliance(native, i, tm, tl)["tau_compliance"],
+            torque = objective.prep.per_window(lambda i, tm, tl: _core.compliance(native, i, tm, tl)["tau_compliance"],
                                             rec.i_m, rec.theta_m, rec.theta_l)
             error = (torque - rec.tau_sensor)[rows]
             return float(np.std(error[np.isfinite(error)]))

@@ -112,22 +112,22 @@ class StribeckFriction(Effect):
                 f"(omega_fc = {p['omega_fc']:.2g} rad/s): it reshapes friction while the speed passes through zero, "
                 f"a Coulomb law of another shape, not friction above Fc at low speed")
 
-    def settle(self, finding, engine):
+    def settle(self, finding, objective):
         """Where the nominal set has Coulomb friction, an accepted Stribeck rise
         or a Coulomb law of another shape near zero speed: told apart only by
         its held-out gain at held slow speeds; otherwise one ambiguous finding."""
-        if not COULOMB.is_on(engine.nominal):
+        if not COULOMB.is_on(objective.nominal):
             return finding
         h = finding.hypothesis
-        channels = engine.channels_of(h.effect.part)
-        held = held_speed(engine.prep.kin, engine.rec.time)
-        steady = steady_evidence(engine.squared(h.params_before, channels), engine.squared(h.params_after, channels),
-                                 held, engine.fold, engine.test)
+        channels = objective.channels_of(h.effect.part)
+        held = held_speed(objective.prep.kin, objective.rec.time)
+        steady = steady_evidence(objective.squared(h.params_before, channels), objective.squared(h.params_after, channels),
+                                 held, objective.fold, objective.test)
         finding.own_evidence = {"at_held_slow_speeds": {
             "share_of_held_out_samples": round(steady.held_share, 3), "held_out_gain": _finite(steady.gain, 4),
             "z": _finite(steady.z, 2), "folds": steady.folds, "share_of_the_gain": round(steady.steady_share, 3),
             "tells_apart_from_smoothing": steady.separates}}
-        engine.say(f"stribeck_friction at held slow speeds: gain {steady.gain:.3g} (z = {steady.z:.2g}, "
+        objective.say(f"stribeck_friction at held slow speeds: gain {steady.gain:.3g} (z = {steady.z:.2g}, "
                    f"{steady.folds} folds, {100 * steady.held_share:.0f} % of the held-out samples)")
         if steady.separates:
             return finding
