@@ -34,9 +34,15 @@ def cmd_simulate(args) -> int:
 
 def cmd_estimate(args) -> int:
     from hdjoint.jobs.estimate import Options, estimate_to_file
-    figures = estimate_to_file(Options(
-        recording=args.recording, output=args.output, params=args.params, engine=args.engine, smooth=args.smooth,
-        time_unit=args.time_unit, split_gaps=args.split_gaps, allow_jitter=args.allow_jitter))
+    opts = Options(recording=args.recording, output=args.output, params=args.params, engine=args.engine,
+                   smooth=args.smooth, time_unit=args.time_unit, split_gaps=args.split_gaps,
+                   allow_jitter=args.allow_jitter)
+    if args.calibrate_from:
+        from hdjoint.jobs.calibrate import estimate_calibrated, sidecars
+        figures = estimate_calibrated(opts, args.calibrate_from)
+        print(f"calibrated set: {sidecars(args.output)[0]} (its calibration: {sidecars(args.output)[1]})")
+    else:
+        figures = estimate_to_file(opts)
     if figures:
         print(f"{'estimate':<16} {'RMS error':>10} {'max error':>10}   (N.m, against tau_sensor)")
         for name, fig in figures.items():
@@ -107,6 +113,10 @@ def build_parser() -> argparse.ArgumentParser:
                         "recording; each gap is named in a warning")
     p.add_argument("--allow-jitter", action="store_true",
                    help="accept steps more than 20 %% off the median step (the estimator still samples every Ts)")
+    p.add_argument("--calibrate-from", nargs="+", metavar="RECORDING",
+                   help="first calibrate the joint of --params on these recordings (no torque sensor needed; "
+                        "parameters they do not identify keep their nominal value), then estimate with that set; "
+                        "writes OUTPUT's .params.json and .calibration.json beside it")
     p.set_defaults(run=cmd_estimate)
 
     p = sub.add_parser("diagnose", help="locate and name what the model leaves out of a recording")
