@@ -31,14 +31,19 @@ enum State : unsigned {
     kStepFailed = 1u << 3,
     kTerminated = 1u << 4,
     kError = 1u << 5,
+    // Model Exchange (FMI 2.0, section 3.2.3).
+    kEventMode = 1u << 6,
+    kContinuousTimeMode = 1u << 7,
 };
-constexpr unsigned kAnyButFatal = kInstantiated | kInitializationMode | kStepComplete | kStepFailed | kTerminated | kError;
-constexpr unsigned kCanGet = kInitializationMode | kStepComplete | kStepFailed | kTerminated | kError;
-constexpr unsigned kCanSet = kInstantiated | kInitializationMode | kStepComplete;
+constexpr unsigned kCanGet =
+    kInitializationMode | kStepComplete | kStepFailed | kTerminated | kError | kEventMode | kContinuousTimeMode;
+constexpr unsigned kCanSet = kInstantiated | kInitializationMode | kStepComplete | kEventMode | kContinuousTimeMode;
+// fmi2GetContinuousStates, ...Derivatives, ...EventIndicators, ...NominalsOfContinuousStates.
+constexpr unsigned kCanGetVectors = kInitializationMode | kEventMode | kContinuousTimeMode | kTerminated;
 // fmi2Get*Status: after a step, not in the error state (FMI 2.0, table in 4.2.4).
 constexpr unsigned kCanGetStatus = kStepComplete | kStepFailed | kTerminated;
 
-const hdjoint::fmu::StateMachine kMachine = {
+const hdjoint::fmu::StateMachine kCoSimulation = {
     {{kInstantiated, "instantiated"},
      {kInitializationMode, "initialization mode"},
      {kStepComplete, "step complete"},
@@ -51,6 +56,21 @@ const hdjoint::fmu::StateMachine kMachine = {
     kInstantiated | kInitializationMode,
     1.0,
 };
+// Model Exchange's own machine: a state saved by one interface is refused by the other.
+const hdjoint::fmu::StateMachine kModelExchange = {
+    {{kInstantiated, "instantiated"},
+     {kInitializationMode, "initialization mode"},
+     {kEventMode, "event mode"},
+     {kContinuousTimeMode, "continuous-time mode"},
+     {kTerminated, "terminated"},
+     {kError, "error"}},
+    kInstantiated,
+    kError,
+    kEventMode | kContinuousTimeMode | kTerminated,
+    kInstantiated | kInitializationMode,
+    1.0,
+};
+bool is_model_exchange(const Instance* in) { return &in->machine == &kModelExchange; }
 
 const hdjoint::fmu::ModelInfo& info() { return hdjoint::fmu::this_model(); }
 
@@ -106,7 +126,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     };
     try {
         if (name.empty()) return refuse("fmi2Instantiate: instanceName must not be empty");
-        if (fmuType != fmi2CoSimulation)
+        if (fmuType != fmi2CoSimulation && !(fmuType == fmi2ModelExchange && info().model_exchange()))
             return refuse("fmi2Instantiate: " + info().model_identifier + " supports Co-Simulation only");
         const std::string expected = hdjoint::fmu::guid(info());
         if (!fmuGUID || expected != fmuGUID)
@@ -119,7 +139,8 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                 logger(env, name.c_str(), static_cast<fmi2Status>(s), category, "%s", message.c_str());
             };
         }
-        return new Instance(kMachine, name, log, loggingOn != fmi2False);
+        return new Instance(fmuType == fmi2ModelExchange ? kModelExchange : kCoSimulation, name, log,
+                            loggingOn != fmi2False);
     } catch (const std::exception& e) {
         return refuse(std::string("fmi2Instantiate: ") + e.what());
     }
@@ -150,14 +171,16 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     Instance* in = in_state(c, "fmi2ExitInitializationMode", kInitializationMode);
     if (!in) return fmi2Error;
-    return status(in->initialize("fmi2ExitInitializationMode", kStepComplete));
+    return status(in->initialize("fmi2ExitInitializationMode", is_model_exchange(in) ? kEventMode : kStepComplete));
 }
 
-// Not in the error state (FMI 2.0, 4.2.4): only after a step.
+// Not in the error state (FMI 2.0, 4.2.4): only after a step (or, in Model
+// Exchange, from event or continuous-time mode).
 fmi2Status fmi2Terminate(fmi2Component c) {
     auto* in = static_cast<Instance*>(c);
     if (!in) return fmi2Error;
-    return status(in->transition("fmi2Terminate", kStepComplete | kStepFailed, kTerminated));
+    return status(in->transition("fmi2Terminate", kStepComplete | kStepFailed | kEventMode | kContinuousTimeMode,
+                                 kTerminated));
 }
 
 fmi2Status fmi2Reset(fmi2Component c) {
@@ -229,6 +252,57 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
                                         const fmi2ValueReference[], size_t, const fmi2Real[], fmi2Real[]) {
     return not_provided(c, "fmi2GetDirectionalDerivative: not provided (providesDirectionalDerivative is false)");
 }
+
+// ---- Model Exchange (HarmonicDriveJoint) ---------------------------------------
+
+fmi2Status fmi2EnterEventMode(fmi2Component c) {
+    auto* in = static_cast<Instance*>(c);
+    return in ? status(in->transition("fmi2EnterEventMode", kContinuousTimeMode, kEventMode)) : fmi2Error;
+}
+
+// No discrete states: an event (of the event indicators) changes nothing but
+// lets the solver restart at the kink.
+fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo* eventInfo) {
+    Instance* in = in_state(c, "fmi2NewDiscreteStates", kEventMode);
+    if (!in) return fmi2Error;
+    if (!eventInfo) return status(in->error("fmi2NewDiscreteStates: eventInfo is null"));
+    *eventInfo = fmi2EventInfo{fmi2False, fmi2False, fmi2False, fmi2False, fmi2False, 0.0};
+    return fmi2OK;
+}
+
+fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
+    auto* in = static_cast<Instance*>(c);
+    return in ? status(in->transition("fmi2EnterContinuousTimeMode", kEventMode, kContinuousTimeMode)) : fmi2Error;
+}
+
+fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean /*noSetFMUStatePriorToCurrentPoint*/,
+                                       fmi2Boolean* enterEventMode, fmi2Boolean* terminateSimulation) {
+    if (!in_state(c, "fmi2CompletedIntegratorStep", kContinuousTimeMode)) return fmi2Error;
+    if (enterEventMode) *enterEventMode = fmi2False;
+    if (terminateSimulation) *terminateSimulation = fmi2False;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
+    Instance* in = in_state(c, "fmi2SetTime", kEventMode | kContinuousTimeMode);
+    return in ? status(in->set_time("fmi2SetTime", time)) : fmi2Error;
+}
+
+fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx) {
+    Instance* in = in_state(c, "fmi2SetContinuousStates", kContinuousTimeMode);
+    return in ? status(in->set_states("fmi2SetContinuousStates", x, nx)) : fmi2Error;
+}
+
+#define HDJ_FMI2_VECTOR(Function, Which)                                                                   \
+    fmi2Status Function(fmi2Component c, fmi2Real values[], size_t n) {                                   \
+        Instance* in = in_state(c, #Function, kCanGetVectors);                                            \
+        return in ? status(in->get_vector(#Function, Instance::Vector::Which, values, n)) : fmi2Error;    \
+    }
+HDJ_FMI2_VECTOR(fmi2GetDerivatives, Derivatives)
+HDJ_FMI2_VECTOR(fmi2GetEventIndicators, EventIndicators)
+HDJ_FMI2_VECTOR(fmi2GetContinuousStates, States)
+HDJ_FMI2_VECTOR(fmi2GetNominalsOfContinuousStates, Nominals)
+#undef HDJ_FMI2_VECTOR
 
 // ---- Co-Simulation --------------------------------------------------------
 

@@ -323,6 +323,16 @@ PlantOutputs JointPlant::outputs() const {
     return o;
 }
 
+Vector<JointPlant::kEventIndicators> JointPlant::event_indicators() const {
+    Vector<kEventIndicators> z = Vector<kEventIndicators>::Ones();
+    if (p_.backlash > 0.0) {
+        const double elastic =
+            total_torsion(x_(kThetaM), x_(kThetaL), p_) - kinematic_error(x_(kThetaM), x_(kThetaL), p_);
+        z << elastic - 0.5 * p_.backlash, elastic + 0.5 * p_.backlash;
+    }
+    return z;
+}
+
 PlantInternals JointPlant::internals() const {
     PlantInternals r;
     r.friction_scale = plant_friction_scale(t_, p_);

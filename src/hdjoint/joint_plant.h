@@ -106,6 +106,19 @@ public:
     std::vector<double> save_state() const { return save_fields(*this); }
     bool load_state(const std::vector<double>& data) { return load_fields(*this, data); }
 
+    // Model Exchange: a solver moves the state and the clock itself and asks
+    // for derivative(); these place the plant where it asks (no checks: the
+    // derivative reports a state outside the model's domain).
+    void set_full_state(const PlantFullState& x) {
+        x_ = x.head<4>();
+        z_ = x.tail<3>();
+    }
+    void set_time(double t) { t_ = t; }
+    // The state events (plant_signals.def, HDJ_PLANT_EVENT_INDICATORS): the
+    // backlash's two contact edges, each a constant 1 without backlash.
+    static constexpr int kEventIndicators = 2;
+    Vector<kEventIndicators> event_indicators() const;
+
     // State derivative at time t (since initialize) and its Jacobian by the
     // state (analytic; public so tests can check it against differences).
     bool derivative(const PlantFullState& x, double t, const PlantInputs& in, PlantFullState* dx,
