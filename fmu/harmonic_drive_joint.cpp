@@ -51,7 +51,7 @@ public:
             return core_->full_state()(vr - kFirstStateReference);
         if (core_ && vr >= kFirstDerivativeReference && vr < kFirstDerivativeReference + kStateCount) {
             PlantFullState dx;
-            return core_->derivative(core_->full_state(), core_->time(), in_, &dx, nullptr)
+            return core_->derivative(core_->full_state(), core_->time(), in_, &dx, nullptr, true)
                        ? dx(vr - kFirstDerivativeReference) : std::nan("");
         }
         if (core_ && vr >= kFirstIndicatorReference && vr < kFirstIndicatorReference + kIndicatorCount)
@@ -77,7 +77,7 @@ public:
     }
     Result derivatives(double* dx) const override {
         PlantFullState d;
-        if (!core_->derivative(core_->full_state(), core_->time(), in_, &d, nullptr))
+        if (!core_->derivative(core_->full_state(), core_->time(), in_, &d, nullptr, true))
             return Result::error("the state is outside the model's domain (singular torsion or non-finite "
                                  "derivative) at theta_m = " + std::to_string(core_->state()(0)) + " rad");
         for (unsigned i = 0; i < kStateCount; ++i) dx[i] = d(i);

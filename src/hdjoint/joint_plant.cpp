@@ -117,18 +117,22 @@ PlantFullState JointPlant::full_state() const {
 }
 
 bool JointPlant::derivative(const PlantFullState& x, double t, const PlantInputs& in, PlantFullState* dx,
-                            PlantJacobian* J) const {
-    return model<kPlantStates>(x, t, in, dx, J);
+                            PlantJacobian* J, bool saturate) const {
+    return model<kPlantStates>(x, t, in, dx, J, saturate);
 }
 
 template <int S>
-bool JointPlant::model(const Vector<S>& x, double t, const PlantInputs& in, Vector<S>* dx, Matrix<S>* J) const {
+bool JointPlant::model(const Vector<S>& x, double t, const PlantInputs& in, Vector<S>* dx, Matrix<S>* J,
+                       bool saturate) const {
     static_assert(S == 4 || S == kPlantStates, "the plant has 4 mechanical and 3 effect states");
     constexpr bool kFull = S == kPlantStates;
     const double theta_m = x(kThetaM), omega_m = x(kOmegaM), theta_l = x(kThetaL), omega_l = x(kOmegaL);
     const double elastic = total_torsion(theta_m, theta_l, p_) - kinematic_error(theta_m, theta_l, p_);
     double tau_f = 0.0;
-    if (!transmitted_torque(elastic, p_, &tau_f)) return false;
+    if (!transmitted_torque(elastic, p_, &tau_f)) {
+        if (!saturate || !std::isfinite(elastic)) return false;
+        tau_f = std::copysign(kSaturatedTorque, elastic);
+    }
     const double scale = plant_friction_scale(t, p_);
     const bool dahl = kFull && p_.hys_H > 0.0, bouc_wen = kFull && p_.bw_A > 0.0;
     const bool lugre = kFull && p_.lugre_sigma0 > 0.0;

@@ -121,13 +121,22 @@ public:
 
     // State derivative at time t (since initialize) and its Jacobian by the
     // state (analytic; public so tests can check it against differences).
+    // `saturate` (Model Exchange): beyond the torsion asymptote, where the
+    // integrator's own substeps fail and are retried in halves, the
+    // transmitted torque is held at +-kSaturatedTorque instead, so that a
+    // solver's trial point there gets a finite, enormous restoring torque and
+    // its error test rejects the step (a solver through fmpy cannot be told
+    // to retry a failed right-hand side).
     bool derivative(const PlantFullState& x, double t, const PlantInputs& in, PlantFullState* dx,
-                    PlantJacobian* J) const;
+                    PlantJacobian* J, bool saturate = false) const;
+    // The transmission's largest torque (transmitted_torque's bracket), N.m.
+    static constexpr double kSaturatedTorque = 1e12;
 
 private:
     // The model on S = 4 (mechanical) or S = 7 (all) states.
     template <int S>
-    bool model(const Vector<S>& x, double t, const PlantInputs& in, Vector<S>* dx, Matrix<S>* J) const;
+    bool model(const Vector<S>& x, double t, const PlantInputs& in, Vector<S>* dx, Matrix<S>* J,
+               bool saturate = false) const;
     template <int S>
     bool ros2_step(double h, const PlantInputs& in, std::string* message);
     bool torque(const PlantState& x, const Vector<3>& z, double* tau) const;

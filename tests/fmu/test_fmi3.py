@@ -161,15 +161,16 @@ def test_fmi3_state_round_trip_and_seal(tmp_path):
     blob = t.slave.serializeFMUState(t.slave.getFMUState())
     after = []
     for k in range(50):
-        t.slave.setFloat64(vr_in, [0.2, 2.0 + 0.01 * k, 0.02])
+        t.slave.setFloat64(vr_in, [0.25, 0.01 * (200 + k), 0.0001 * (200 + k)])
         t.slave.doStep(time + k * 1e-3, 1e-3)
         after.append(t.outputs())
     state = t.slave.deserializeFMUState(blob)
     t.slave.setFMUState(state)
     for k in range(50):
-        t.slave.setFloat64(vr_in, [0.2, 2.0 + 0.01 * k, 0.02])
+        t.slave.setFloat64(vr_in, [0.25, 0.01 * (200 + k), 0.0001 * (200 + k)])
         t.slave.doStep(time + k * 1e-3, 1e-3)
         assert np.array_equal(t.outputs(), after[k])
+    assert not np.array_equal(after[0], after[-1])
     # An edit of one field, even to a valid value, breaks the seal.
     edited = bytearray(blob)
     edited[8 * 3:8 * 4] = struct.pack("<d", struct.unpack("<d", blob[8 * 3:8 * 4])[0] + 1e-3)
