@@ -91,18 +91,28 @@ std::uint64_t fnv1a(const std::string& s, std::uint64_t seed) {
     return h;
 }
 
-// The 1-based indices of the inputs an output's initial value depends on.
-std::string initial_dependencies(const ModelInfo& info, const Variable& output) {
-    std::istringstream names(output.initial_dependencies);
-    std::string name, indices;
-    while (names >> name) {
-        std::size_t index = 0;
-        for (std::size_t i = 0; i < info.variables.size() && !index; ++i)
-            if (info.variables[i].name == name && info.variables[i].causality == Causality::Input) index = i + 1;
-        if (!index) throw std::runtime_error("output " + output.name + " depends on '" + name + "', not an input");
-        indices += (indices.empty() ? "" : " ") + std::to_string(index);
+// The variables named in `names` (space-separated), each as `reference(index)`
+// gives it (index: 0-based in info.variables); every one must have causality `of`.
+template <class Reference>
+std::string references(const ModelInfo& info, const Variable& dependent, const std::string& names, Causality of,
+                       Reference reference) {
+    std::istringstream in(names);
+    std::string name, list;
+    while (in >> name) {
+        std::size_t index = info.variables.size();
+        for (std::size_t i = 0; i < info.variables.size() && index == info.variables.size(); ++i)
+            if (info.variables[i].name == name && info.variables[i].causality == of) index = i;
+        if (index == info.variables.size())
+            throw std::runtime_error(dependent.name + " depends on '" + name + "', not a variable of that kind");
+        list += (list.empty() ? "" : " ") + reference(index);
     }
-    return indices;
+    return list;
+}
+
+// A variable's initial value: the inputs it depends on (FMI 2.0: 1-based indices).
+std::string initial_dependencies(const ModelInfo& info, const Variable& v) {
+    return references(info, v, v.initial_dependencies, Causality::Input,
+                      [](std::size_t i) { return std::to_string(i + 1); });
 }
 
 }  // namespace
@@ -144,12 +154,6 @@ std::string source_files(const std::vector<std::string>& sources, const char* el
     return x;
 }
 
-const Variable& variable_named(const ModelInfo& info, const std::string& name) {
-    for (const Variable& v : info.variables)
-        if (v.name == name) return v;
-    throw std::runtime_error("no variable named '" + name + "'");
-}
-
 std::string bounds(const Variable& v) {
     std::string x;
     if (v.min > -1e299) x += " min=\"" + number(v.min) + "\"";
@@ -162,10 +166,7 @@ std::string bounds(const Variable& v) {
 template <class Reference>
 std::string run_dependencies(const ModelInfo& info, const Variable& output, Reference reference) {
     if (!info.model_exchange()) return "";
-    std::istringstream names(output.state_dependencies);
-    std::string name, list;
-    while (names >> name) list += (list.empty() ? "" : " ") + reference(variable_named(info, name));
-    return list;
+    return references(info, output, output.state_dependencies, Causality::Local, reference);
 }
 
 bool is_state(const Variable& v) {
@@ -223,7 +224,7 @@ std::string fmi2_description(const ModelInfo& info, const std::vector<std::strin
         if (is_derivative(v)) x << " derivative=\"" << index_of.at(static_cast<unsigned>(v.derivative_of)) << "\"";
         x << bounds(v) << "/>\n    </ScalarVariable>\n";
     }
-    auto index = [&](const Variable& v) { return std::to_string(index_of.at(v.value_reference)); };
+    auto index = [](std::size_t i) { return std::to_string(i + 1); };
     x << "  </ModelVariables>\n  <ModelStructure>\n    <Outputs>\n";
     // Outputs change only inside doStep: no direct feedthrough from inputs,
     // so masters see no algebraic loop when a controller closes the loop.
@@ -246,9 +247,7 @@ std::string fmi2_description(const ModelInfo& info, const std::vector<std::strin
     std::sort(initial.begin(), initial.end());
     for (std::size_t k : initial) {
         const Variable& v = info.variables[k - 1];
-        x << "      <Unknown index=\"" << k << "\"";
-        if (v.causality == Causality::Output) x << " dependencies=\"" << initial_dependencies(info, v) << "\"";
-        x << "/>\n";
+        x << "      <Unknown index=\"" << k << "\" dependencies=\"" << initial_dependencies(info, v) << "\"/>\n";
     }
     x << "    </InitialUnknowns>\n  </ModelStructure>\n</fmiModelDescription>\n";
     return x.str();
@@ -287,7 +286,7 @@ std::string fmi3_description(const ModelInfo& info) {
         if (is_derivative(v)) x << " derivative=\"" << v.derivative_of << "\"";
         x << bounds(v) << "\n      description=\"" << escape(v.description) << "\"/>\n";
     }
-    auto reference = [](const Variable& v) { return std::to_string(v.value_reference); };
+    auto reference = [&](std::size_t i) { return std::to_string(info.variables[i].value_reference); };
     x << "  </ModelVariables>\n  <ModelStructure>\n";
     for (const Variable& v : info.variables)
         if (v.causality == Causality::Output)
@@ -297,15 +296,8 @@ std::string fmi3_description(const ModelInfo& info) {
         if (is_derivative(v)) x << "    <ContinuousStateDerivative valueReference=\"" << v.value_reference << "\"/>\n";
     for (const Variable& v : info.variables) {
         if (v.causality != Causality::Output && !is_state(v) && !is_derivative(v)) continue;
-        x << "    <InitialUnknown valueReference=\"" << v.value_reference << "\"";
-        if (v.causality == Causality::Output) {
-            std::string deps;
-            std::istringstream names(v.initial_dependencies);
-            for (std::string name; names >> name;)
-                deps += (deps.empty() ? "" : " ") + reference(variable_named(info, name));
-            x << " dependencies=\"" << deps << "\"";
-        }
-        x << "/>\n";
+        x << "    <InitialUnknown valueReference=\"" << v.value_reference << "\" dependencies=\""
+          << references(info, v, v.initial_dependencies, Causality::Input, reference) << "\"/>\n";
     }
     for (const Variable& v : info.variables)
         if (is_event_indicator(v)) x << "    <EventIndicator valueReference=\"" << v.value_reference << "\"/>\n";

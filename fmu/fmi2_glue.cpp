@@ -18,8 +18,7 @@ using hdjoint::fmu::Code;
 using hdjoint::fmu::Instance;
 using hdjoint::fmu::SavedState;
 
-static_assert(fmi2OK == static_cast<int>(hdjoint::fmu::kOk) && fmi2Warning == static_cast<int>(hdjoint::fmu::kWarning) &&
-              fmi2Discard == static_cast<int>(hdjoint::fmu::kDiscard) && fmi2Error == static_cast<int>(hdjoint::fmu::kError),
+static_assert(hdjoint::fmu::has_shared_codes(fmi2OK, fmi2Warning, fmi2Discard, fmi2Error),
               "the shared status codes are fmi2Status's");
 
 // States of the Co-Simulation state machine (FMI 2.0, section 4.2.4), as bits

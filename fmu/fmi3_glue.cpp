@@ -24,8 +24,7 @@ using hdjoint::fmu::Code;
 using hdjoint::fmu::Instance;
 using hdjoint::fmu::SavedState;
 
-static_assert(fmi3OK == static_cast<int>(hdjoint::fmu::kOk) && fmi3Warning == static_cast<int>(hdjoint::fmu::kWarning) &&
-              fmi3Discard == static_cast<int>(hdjoint::fmu::kDiscard) && fmi3Error == static_cast<int>(hdjoint::fmu::kError),
+static_assert(hdjoint::fmu::has_shared_codes(fmi3OK, fmi3Warning, fmi3Discard, fmi3Error),
               "the shared status codes are fmi3Status's");
 
 // The states of FMI 3.0's Co-Simulation (without event mode) and Model

@@ -109,12 +109,12 @@ ModelInfo with_model_exchange(ModelInfo info) {
     constexpr double inf = 1e300;
     for (unsigned i = 0; i < kStateCount; ++i)
         info.variables.push_back({kStates[i].name, kFirstStateReference + i, Causality::Local, kStates[i].unit,
-                                  std::string("continuous state: ") + kStates[i].description, 0.0, -inf, inf, "",
-                                  -1, ""});
+                                  std::string("continuous state: ") + kStates[i].description, 0.0, -inf, inf,
+                                  "tau_ext", -1, ""});  // the equilibrium it starts from carries tau_ext
     for (unsigned i = 0; i < kStateCount; ++i)
         info.variables.push_back({std::string("der(") + kStates[i].name + ")", kFirstDerivativeReference + i,
                                   Causality::Local, kStates[i].derivative_unit,
-                                  std::string("derivative of ") + kStates[i].name, 0.0, -inf, inf, "",
+                                  std::string("derivative of ") + kStates[i].name, 0.0, -inf, inf, "i_m tau_ext",
                                   static_cast<long>(kFirstStateReference + i), ""});
     for (unsigned i = 0; i < kIndicatorCount; ++i)
         info.variables.push_back({kIndicators[i].name, kFirstIndicatorReference + i, Causality::Local,

@@ -18,6 +18,11 @@ namespace hdjoint::fmu {
 // Status codes with the values of fmi2Status and fmi3Status (both glues
 // static_assert that they agree).
 enum Code : int { kOk = 0, kWarning = 1, kDiscard = 2, kError = 3 };
+template <class S>
+constexpr bool has_shared_codes(S ok, S warning, S discard, S error) {
+    return static_cast<int>(ok) == kOk && static_cast<int>(warning) == kWarning &&
+           static_cast<int>(discard) == kDiscard && static_cast<int>(error) == kError;
+}
 
 // One glue's state machine: its states as bits, named, and which of them
 // need (or must not have) an initialised model. `error` is the state an
