@@ -54,6 +54,7 @@ const hdjoint::fmu::StateMachine kCoSimulation = {
     kStepComplete | kStepFailed | kTerminated,
     kInstantiated | kInitializationMode,
     1.0,
+    false,
 };
 // Model Exchange's own machine: a state saved by one interface is refused by the other.
 const hdjoint::fmu::StateMachine kModelExchange = {
@@ -68,12 +69,21 @@ const hdjoint::fmu::StateMachine kModelExchange = {
     kEventMode | kContinuousTimeMode | kTerminated,
     kInstantiated | kInitializationMode,
     1.0,
+    true,
 };
 bool is_model_exchange(const Instance* in) { return &in->machine == &kModelExchange; }
 
 const hdjoint::fmu::ModelInfo& info() { return hdjoint::fmu::this_model(); }
 
 fmi2Status status(Code c) { return static_cast<fmi2Status>(c); }
+
+// The instance, if the Model Exchange (or Co-Simulation) function `function`
+// may be called in its state.
+Instance* in_state(fmi2Component c, const char* function, unsigned states, bool model_exchange) {
+    Instance* in = static_cast<Instance*>(c);
+    return in && in->allowed(function, states, model_exchange) ? in : nullptr;
+}
+constexpr bool kME = true, kCS = false;
 
 // The instance behind a component, if `function` may be called in its state.
 Instance* in_state(fmi2Component c, const char* function, unsigned states) {
@@ -94,12 +104,12 @@ fmi2Status not_provided(fmi2Component c, const std::string& message) {
 // any other: doStep is synchronous, so nothing is ever pending.
 template <class T>
 fmi2Status report_status(fmi2Component c, const char* function, fmi2StatusKind, T*) {
-    return in_state(c, function, kCanGetStatus) ? fmi2Discard : fmi2Error;
+    return in_state(c, function, kCanGetStatus, kCS) ? fmi2Discard : fmi2Error;
 }
 template <class T, class Answer>
 fmi2Status report_status(fmi2Component c, const char* function, fmi2StatusKind asked, T* value,
                          fmi2StatusKind known, Answer answer) {
-    Instance* in = in_state(c, function, kCanGetStatus);
+    Instance* in = in_state(c, function, kCanGetStatus, kCS);
     if (!in) return fmi2Error;
     if (asked != known || !value) return fmi2Discard;
     *value = answer(*in);
@@ -255,14 +265,16 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
 // ---- Model Exchange (HarmonicDriveJoint) ---------------------------------------
 
 fmi2Status fmi2EnterEventMode(fmi2Component c) {
-    auto* in = static_cast<Instance*>(c);
-    return in ? status(in->transition("fmi2EnterEventMode", kContinuousTimeMode, kEventMode)) : fmi2Error;
+    Instance* in = in_state(c, "fmi2EnterEventMode", kContinuousTimeMode, kME);
+    if (!in) return fmi2Error;
+    in->state = kEventMode;
+    return fmi2OK;
 }
 
 // No discrete states: an event (of the event indicators) changes nothing but
 // lets the solver restart at the kink.
 fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo* eventInfo) {
-    Instance* in = in_state(c, "fmi2NewDiscreteStates", kEventMode);
+    Instance* in = in_state(c, "fmi2NewDiscreteStates", kEventMode, kME);
     if (!in) return fmi2Error;
     if (!eventInfo) return status(in->error("fmi2NewDiscreteStates: eventInfo is null"));
     *eventInfo = fmi2EventInfo{fmi2False, fmi2False, fmi2False, fmi2False, fmi2False, 0.0};
@@ -270,31 +282,33 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo* eventInfo) {
 }
 
 fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
-    auto* in = static_cast<Instance*>(c);
-    return in ? status(in->transition("fmi2EnterContinuousTimeMode", kEventMode, kContinuousTimeMode)) : fmi2Error;
+    Instance* in = in_state(c, "fmi2EnterContinuousTimeMode", kEventMode, kME);
+    if (!in) return fmi2Error;
+    in->state = kContinuousTimeMode;
+    return fmi2OK;
 }
 
 fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean /*noSetFMUStatePriorToCurrentPoint*/,
                                        fmi2Boolean* enterEventMode, fmi2Boolean* terminateSimulation) {
-    if (!in_state(c, "fmi2CompletedIntegratorStep", kContinuousTimeMode)) return fmi2Error;
+    if (!in_state(c, "fmi2CompletedIntegratorStep", kContinuousTimeMode, kME)) return fmi2Error;
     if (enterEventMode) *enterEventMode = fmi2False;
     if (terminateSimulation) *terminateSimulation = fmi2False;
     return fmi2OK;
 }
 
 fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
-    Instance* in = in_state(c, "fmi2SetTime", kEventMode | kContinuousTimeMode);
+    Instance* in = in_state(c, "fmi2SetTime", kEventMode | kContinuousTimeMode, kME);
     return in ? status(in->set_time("fmi2SetTime", time)) : fmi2Error;
 }
 
 fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx) {
-    Instance* in = in_state(c, "fmi2SetContinuousStates", kContinuousTimeMode);
+    Instance* in = in_state(c, "fmi2SetContinuousStates", kContinuousTimeMode, kME);
     return in ? status(in->set_states("fmi2SetContinuousStates", x, nx)) : fmi2Error;
 }
 
 #define HDJ_FMI2_VECTOR(Function, Which)                                                                   \
     fmi2Status Function(fmi2Component c, fmi2Real values[], size_t n) {                                   \
-        Instance* in = in_state(c, #Function, kCanGetVectors);                                            \
+        Instance* in = in_state(c, #Function, kCanGetVectors, kME);                                            \
         return in ? status(in->get_vector(#Function, Instance::Vector::Which, values, n)) : fmi2Error;    \
     }
 HDJ_FMI2_VECTOR(fmi2GetDerivatives, Derivatives)
@@ -317,7 +331,7 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
                       fmi2Boolean /*noSetFMUStatePriorToCurrentPoint*/) {
-    Instance* in = in_state(c, "fmi2DoStep", kStepComplete);
+    Instance* in = in_state(c, "fmi2DoStep", kStepComplete, kCS);
     return in ? status(in->do_step("fmi2DoStep", currentCommunicationPoint, communicationStepSize)) : fmi2Error;
 }
 

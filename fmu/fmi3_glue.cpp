@@ -59,6 +59,7 @@ const hdjoint::fmu::StateMachine kCoSimulation = {
     kStepMode | kTerminated,
     kInstantiated | kInitializationMode,
     -1.0,
+    false,
 };
 const hdjoint::fmu::StateMachine kModelExchange = {
     {{kInstantiated, "Instantiated"},
@@ -72,6 +73,7 @@ const hdjoint::fmu::StateMachine kModelExchange = {
     kEventMode | kContinuousTimeMode | kTerminated,
     kInstantiated | kInitializationMode,
     -1.0,
+    true,
 };
 
 const hdjoint::fmu::ModelInfo& info() { return hdjoint::fmu::this_model(); }
@@ -79,6 +81,14 @@ const hdjoint::fmu::ModelInfo& info() { return hdjoint::fmu::this_model(); }
 fmi3Status status(Code c) { return static_cast<fmi3Status>(c); }
 
 Instance* as_instance(fmi3Instance c) { return static_cast<Instance*>(c); }
+
+// The instance, if the Model Exchange (or Co-Simulation) function `function`
+// may be called in its state.
+Instance* in_state(fmi3Instance c, const char* function, unsigned states, bool model_exchange) {
+    Instance* in = static_cast<Instance*>(c);
+    return in && in->allowed(function, states, model_exchange) ? in : nullptr;
+}
+constexpr bool kME = true, kCS = false;
 
 // The instance, if `function` may be called in its state.
 Instance* in_state(fmi3Instance c, const char* function, unsigned states) {
@@ -204,8 +214,10 @@ fmi3Status fmi3ExitInitializationMode(fmi3Instance c) {
 }
 
 fmi3Status fmi3EnterEventMode(fmi3Instance c) {
-    Instance* in = as_instance(c);
-    return in ? status(in->transition("fmi3EnterEventMode", kContinuousTimeMode, kEventMode)) : fmi3Error;
+    Instance* in = in_state(c, "fmi3EnterEventMode", kContinuousTimeMode, kME);
+    if (!in) return fmi3Error;
+    in->state = kEventMode;
+    return fmi3OK;
 }
 
 fmi3Status fmi3Terminate(fmi3Instance c) {
@@ -362,7 +374,7 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance c, fmi3Boolean* discreteStatesN
                                     fmi3Boolean* terminateSimulation, fmi3Boolean* nominalsOfContinuousStatesChanged,
                                     fmi3Boolean* valuesOfContinuousStatesChanged, fmi3Boolean* nextEventTimeDefined,
                                     fmi3Float64* nextEventTime) {
-    if (!in_state(c, "fmi3UpdateDiscreteStates", kEventMode)) return fmi3Error;
+    if (!in_state(c, "fmi3UpdateDiscreteStates", kEventMode, kME)) return fmi3Error;
     for (fmi3Boolean* flag : {discreteStatesNeedUpdate, terminateSimulation, nominalsOfContinuousStatesChanged,
                               valuesOfContinuousStatesChanged, nextEventTimeDefined})
         set_flag(flag, false);
@@ -371,31 +383,33 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance c, fmi3Boolean* discreteStatesN
 }
 
 fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance c) {
-    Instance* in = as_instance(c);
-    return in ? status(in->transition("fmi3EnterContinuousTimeMode", kEventMode, kContinuousTimeMode)) : fmi3Error;
+    Instance* in = in_state(c, "fmi3EnterContinuousTimeMode", kEventMode, kME);
+    if (!in) return fmi3Error;
+    in->state = kContinuousTimeMode;
+    return fmi3OK;
 }
 
 fmi3Status fmi3CompletedIntegratorStep(fmi3Instance c, fmi3Boolean /*noSetFMUStatePriorToCurrentPoint*/,
                                        fmi3Boolean* enterEventMode, fmi3Boolean* terminateSimulation) {
-    if (!in_state(c, "fmi3CompletedIntegratorStep", kContinuousTimeMode)) return fmi3Error;
+    if (!in_state(c, "fmi3CompletedIntegratorStep", kContinuousTimeMode, kME)) return fmi3Error;
     set_flag(enterEventMode, false);
     set_flag(terminateSimulation, false);
     return fmi3OK;
 }
 
 fmi3Status fmi3SetTime(fmi3Instance c, fmi3Float64 time) {
-    Instance* in = in_state(c, "fmi3SetTime", kEventMode | kContinuousTimeMode);
+    Instance* in = in_state(c, "fmi3SetTime", kEventMode | kContinuousTimeMode, kME);
     return in ? status(in->set_time("fmi3SetTime", time)) : fmi3Error;
 }
 
 fmi3Status fmi3SetContinuousStates(fmi3Instance c, const fmi3Float64 x[], size_t n) {
-    Instance* in = in_state(c, "fmi3SetContinuousStates", kContinuousTimeMode);
+    Instance* in = in_state(c, "fmi3SetContinuousStates", kContinuousTimeMode, kME);
     return in ? status(in->set_states("fmi3SetContinuousStates", x, n)) : fmi3Error;
 }
 
 #define HDJ_FMI3_VECTOR(Function, Which)                                                                   \
     fmi3Status Function(fmi3Instance c, fmi3Float64 values[], size_t n) {                                 \
-        Instance* in = in_state(c, #Function, kCanGetVectors);                                            \
+        Instance* in = in_state(c, #Function, kCanGetVectors, kME);                                            \
         return in ? status(in->get_vector(#Function, Instance::Vector::Which, values, n)) : fmi3Error;    \
     }
 HDJ_FMI3_VECTOR(fmi3GetContinuousStateDerivatives, Derivatives)
@@ -436,7 +450,7 @@ fmi3Status fmi3GetOutputDerivatives(fmi3Instance c, const fmi3ValueReference[], 
 fmi3Status fmi3DoStep(fmi3Instance c, fmi3Float64 currentCommunicationPoint, fmi3Float64 communicationStepSize,
                       fmi3Boolean /*noSetFMUStatePriorToCurrentPoint*/, fmi3Boolean* eventHandlingNeeded,
                       fmi3Boolean* terminateSimulation, fmi3Boolean* earlyReturn, fmi3Float64* lastSuccessfulTime) {
-    Instance* in = in_state(c, "fmi3DoStep", kStepMode);
+    Instance* in = in_state(c, "fmi3DoStep", kStepMode, kCS);
     if (!in) return fmi3Error;
     const Code s = in->do_step("fmi3DoStep", currentCommunicationPoint, communicationStepSize);
     set_flag(eventHandlingNeeded, false);

@@ -72,7 +72,7 @@ public:
     }
     Result set_states(const double* x) override {
         core_->set_full_state(Eigen::Map<const PlantFullState>(x));
-        out_ = core_->outputs();
+        out_ = core_->outputs(true);  // the torque the right-hand side uses
         return Result::ok();
     }
     Result derivatives(double* dx) const override {

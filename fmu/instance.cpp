@@ -77,6 +77,16 @@ bool Instance::allowed(const char* function, unsigned states) {
     return false;
 }
 
+bool Instance::allowed(const char* function, unsigned states, bool model_exchange) {
+    if (machine.model_exchange != model_exchange) {
+        error(std::string(function) + " is a " + (model_exchange ? "Model Exchange" : "Co-Simulation") +
+              " function, but this instance was instantiated for " +
+              (machine.model_exchange ? "Model Exchange" : "Co-Simulation"));
+        return false;
+    }
+    return allowed(function, states);
+}
+
 Code Instance::transition(const char* function, unsigned from, unsigned to) {
     if (!allowed(function, from)) return kError;
     state = to;

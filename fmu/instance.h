@@ -36,6 +36,8 @@ struct StateMachine {
     // Marks the serialised states of this glue: the FMU's magic number times
     // this sign, so that neither FMI version loads the other's states.
     double magic_sign;
+    // Model Exchange's machine (else Co-Simulation's).
+    bool model_exchange;
 
     const char* name(unsigned state) const;
     bool is_state(double value) const;
@@ -74,6 +76,8 @@ public:
     Code error(const std::string& message);
     // Whether `function` may be called in the present state; if not, an error.
     bool allowed(const char* function, unsigned states);
+    // The same for a function of one interface only (Model Exchange or Co-Simulation).
+    bool allowed(const char* function, unsigned states, bool model_exchange);
     // A call that only moves the state machine.
     Code transition(const char* function, unsigned from, unsigned to);
     Code to_code(const Result& r);

@@ -82,7 +82,8 @@ public:
     // or h needs more than kMaxSubstepsPerAdvance substeps.
     bool advance(double h, const PlantInputs& in, std::string* message = nullptr);
 
-    PlantOutputs outputs() const;
+    // `saturate`: with the transmitted torque held as derivative(..., true) holds it.
+    PlantOutputs outputs(bool saturate = false) const;
     const PlantState& state() const { return x_; }
     PlantFullState full_state() const;
     double time() const { return t_; }  // since initialize(); drives the friction drift and warm-up
@@ -139,7 +140,8 @@ private:
                bool saturate = false) const;
     template <int S>
     bool ros2_step(double h, const PlantInputs& in, std::string* message);
-    bool torque(const PlantState& x, const Vector<3>& z, double* tau) const;
+    bool torque(const PlantState& x, const Vector<3>& z, double* tau, bool saturate = false) const;
+    bool elastic_torque(double elastic, double* tau_f, bool saturate) const;
     bool within_bounds(const Vector<3>& z, double h) const;
     bool extra_states() const { return p_.hys_H > 0.0 || p_.bw_A > 0.0 || p_.lugre_sigma0 > 0.0; }
     bool substep(double h, const PlantInputs& in, int depth, std::string* message);
