@@ -21,19 +21,8 @@ using hdjoint::fmu::SavedState;
 static_assert(hdjoint::fmu::has_shared_codes(fmi2OK, fmi2Warning, fmi2Discard, fmi2Error),
               "the shared status codes are fmi2Status's");
 
-// States of the Co-Simulation state machine (FMI 2.0, section 4.2.4), as bits
-// so each function names the set of states it may be called in.
-enum State : unsigned {
-    kInstantiated = 1u << 0,
-    kInitializationMode = 1u << 1,
-    kStepComplete = 1u << 2,
-    kStepFailed = 1u << 3,
-    kTerminated = 1u << 4,
-    kError = 1u << 5,
-    // Model Exchange (FMI 2.0, section 3.2.3).
-    kEventMode = 1u << 6,
-    kContinuousTimeMode = 1u << 7,
-};
+// FMI 2.0's states: Co-Simulation (section 4.2.4) and Model Exchange (3.2.3).
+using namespace hdjoint::fmu::states;
 constexpr unsigned kCanGet =
     kInitializationMode | kStepComplete | kStepFailed | kTerminated | kError | kEventMode | kContinuousTimeMode;
 constexpr unsigned kCanSet = kInstantiated | kInitializationMode | kStepComplete | kEventMode | kContinuousTimeMode;

@@ -27,17 +27,9 @@ using hdjoint::fmu::SavedState;
 static_assert(hdjoint::fmu::has_shared_codes(fmi3OK, fmi3Warning, fmi3Discard, fmi3Error),
               "the shared status codes are fmi3Status's");
 
-// The states of FMI 3.0's Co-Simulation (without event mode) and Model
-// Exchange state machines, as bits. kError: after fmi3Error, until reset.
-enum State : unsigned {
-    kInstantiated = 1u << 0,
-    kInitializationMode = 1u << 1,
-    kEventMode = 1u << 2,
-    kContinuousTimeMode = 1u << 3,
-    kStepMode = 1u << 4,
-    kTerminated = 1u << 5,
-    kError = 1u << 6,
-};
+// FMI 3.0's states: Co-Simulation without event mode (section 4.2) and Model
+// Exchange (3.2); kError: after fmi3Error, until fmi3Reset.
+using namespace hdjoint::fmu::states;
 constexpr unsigned kAny = kInstantiated | kInitializationMode | kEventMode | kContinuousTimeMode | kStepMode |
                           kTerminated | kError;
 constexpr unsigned kCanGet = kAny;

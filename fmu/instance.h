@@ -24,6 +24,24 @@ constexpr bool has_shared_codes(S ok, S warning, S discard, S error) {
            static_cast<int>(discard) == kDiscard && static_cast<int>(error) == kError;
 }
 
+// The states of both versions' state machines, as bits, so that each function
+// names the set of states it may be called in. FMI 2.0 Co-Simulation's step
+// complete is FMI 3.0's Step Mode; step failed is FMI 2.0's only. The values
+// are stored in serialised FMU states: never renumber them.
+namespace states {
+enum State : unsigned {
+    kInstantiated = 1u << 0,
+    kInitializationMode = 1u << 1,
+    kStepComplete = 1u << 2,
+    kStepMode = kStepComplete,
+    kStepFailed = 1u << 3,
+    kTerminated = 1u << 4,
+    kError = 1u << 5,
+    kEventMode = 1u << 6,           // Model Exchange
+    kContinuousTimeMode = 1u << 7,  // Model Exchange
+};
+}  // namespace states
+
 // One glue's state machine: its states as bits, named, and which of them
 // need (or must not have) an initialised model. `error` is the state an
 // error leaves the instance in.
