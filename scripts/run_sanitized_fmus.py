@@ -27,7 +27,8 @@ FMUS = ("JointTorqueEstimator", "HarmonicDriveJoint", "JointController")
 def binary_is_sanitized(fmu: Path) -> bool:
     """The FMU's binary needs libasan and libubsan (a plain build would pass vacuously)."""
     with zipfile.ZipFile(fmu) as z, open(fmu.with_suffix(".so.check"), "wb") as out:
-        out.write(z.read(f"binaries/linux64/{fmu.stem}.so"))
+        binary = next(n for n in z.namelist() if n.startswith("binaries/") and n.endswith(".so"))
+        out.write(z.read(binary))
     try:
         needed = subprocess.run(["readelf", "-d", str(fmu.with_suffix(".so.check"))], capture_output=True,
                                 text=True, check=True).stdout
