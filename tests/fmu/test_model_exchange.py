@@ -4,8 +4,8 @@ the joint's own right-hand side reproduces the Co-Simulation FMU.
 The tolerance is measured, not guessed. Co-Simulation integrates with ROS2,
 second order, on substeps of max_step; its error at max_step h is estimated
 by Richardson extrapolation from a run at 4h: |CS(4h) - CS(h)| / 15. CVode
-at rtol 1e-9 is far more accurate than that (a run at rtol 1e-10 moves its
-result by less than a tenth of it), so |ME - CS(h)| must stay within twice
+at rtol 1e-9 is more accurate than that (a run at rtol 1e-10 moves its
+result by less than a fifth of it), so |ME - CS(h)| must stay within twice
 the Co-Simulation's own estimated error (and, for the encoder readings,
 one count more: a reading flips where the true angle sits on a count
 boundary). Both FMUs get the same zero-order-hold input: Co-Simulation holds
