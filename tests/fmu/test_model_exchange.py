@@ -115,3 +115,32 @@ def test_fmi2_and_fmi3_model_exchange_agree_bit_for_bit(paper_current):
     assert len(runs[0]) == len(runs[1])
     for name in OUTPUTS:
         assert np.array_equal(runs[0][name], runs[1][name]), name
+
+
+def test_state_events_at_the_backlash_edges_match_a_fine_step_reference(paper_current):
+    """CVode stops at each contact edge of the backlash (an event indicator's
+    zero); the Co-Simulation FMU, stepped at 1e-4 s with the same held input,
+    shows the same crossings of the same indicator (a local variable both
+    interfaces can read). Its crossing times, interpolated linearly between
+    samples 1e-4 s apart, are good to a small fraction of that spacing: the
+    event times must agree within a tenth of it."""
+    stop, fine_step = 0.2, 1e-4
+    params = {**parameters.for_plant(experiments.true_joint_parameters()), **CASES["backlash_hysteresis"]}
+    _, stairs = _inputs(*paper_current)
+    stairs = stairs[stairs["time"] <= stop]
+    path = fmu_path(JOINT, 3)
+    me = simulate_fmu(str(path), fmi_type="ModelExchange", stop_time=stop, output_interval=SAMPLE, input=stairs,
+                      output=["tau_joint"], relative_tolerance=1e-9, start_values=params)
+    k = me["time"] / SAMPLE
+    events = np.unique(me["time"][np.abs(k - np.round(k)) > 1e-6])
+    cs = simulate_fmu(str(path), stop_time=stop, output_interval=fine_step, input=stairs,
+                      output=["backlash_upper", "backlash_lower"], start_values={**params, "max_step": H})
+    crossings = []
+    for name in ("backlash_upper", "backlash_lower"):
+        z, t = cs[name], cs["time"]
+        i = np.where(np.sign(z[:-1]) != np.sign(z[1:]))[0]
+        crossings += list(t[i] - z[i] * (t[i + 1] - t[i]) / (z[i + 1] - z[i]))
+    crossings = np.sort(crossings)
+    assert len(events) >= 3, "the teeth never separated: the test shows nothing"
+    assert len(events) == len(crossings), (events, crossings)
+    assert np.max(np.abs(events - crossings)) <= fine_step / 10, (events, crossings)
