@@ -295,15 +295,16 @@ fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t n
     return in ? status(in->set_states("fmi2SetContinuousStates", x, nx)) : fmi2Error;
 }
 
-#define HDJ_FMI2_VECTOR(Function, Which)                                                                   \
+#define HDJ_FMI2_VECTOR(Function, Which, States)                                                                 \
     fmi2Status Function(fmi2Component c, fmi2Real values[], size_t n) {                                   \
-        Instance* in = in_state(c, #Function, kCanGetVectors, kME);                                            \
+        Instance* in = in_state(c, #Function, States, kME);                                                    \
         return in ? status(in->get_vector(#Function, Instance::Vector::Which, values, n)) : fmi2Error;    \
     }
-HDJ_FMI2_VECTOR(fmi2GetDerivatives, Derivatives)
-HDJ_FMI2_VECTOR(fmi2GetEventIndicators, EventIndicators)
-HDJ_FMI2_VECTOR(fmi2GetContinuousStates, States)
-HDJ_FMI2_VECTOR(fmi2GetNominalsOfContinuousStates, Nominals)
+HDJ_FMI2_VECTOR(fmi2GetDerivatives, Derivatives, kCanGetVectors)
+HDJ_FMI2_VECTOR(fmi2GetEventIndicators, EventIndicators, kCanGetVectors)
+HDJ_FMI2_VECTOR(fmi2GetContinuousStates, States, kCanGetVectors)
+// The nominals are fixed: known from instantiation on.
+HDJ_FMI2_VECTOR(fmi2GetNominalsOfContinuousStates, Nominals, kCanGetVectors | kInstantiated)
 #undef HDJ_FMI2_VECTOR
 
 // ---- Co-Simulation --------------------------------------------------------

@@ -399,15 +399,16 @@ fmi3Status fmi3SetContinuousStates(fmi3Instance c, const fmi3Float64 x[], size_t
     return in ? status(in->set_states("fmi3SetContinuousStates", x, n)) : fmi3Error;
 }
 
-#define HDJ_FMI3_VECTOR(Function, Which)                                                                   \
+#define HDJ_FMI3_VECTOR(Function, Which, States)                                                                 \
     fmi3Status Function(fmi3Instance c, fmi3Float64 values[], size_t n) {                                 \
-        Instance* in = in_state(c, #Function, kCanGetVectors, kME);                                            \
+        Instance* in = in_state(c, #Function, States, kME);                                                    \
         return in ? status(in->get_vector(#Function, Instance::Vector::Which, values, n)) : fmi3Error;    \
     }
-HDJ_FMI3_VECTOR(fmi3GetContinuousStateDerivatives, Derivatives)
-HDJ_FMI3_VECTOR(fmi3GetEventIndicators, EventIndicators)
-HDJ_FMI3_VECTOR(fmi3GetContinuousStates, States)
-HDJ_FMI3_VECTOR(fmi3GetNominalsOfContinuousStates, Nominals)
+HDJ_FMI3_VECTOR(fmi3GetContinuousStateDerivatives, Derivatives, kCanGetVectors)
+HDJ_FMI3_VECTOR(fmi3GetEventIndicators, EventIndicators, kCanGetVectors)
+HDJ_FMI3_VECTOR(fmi3GetContinuousStates, States, kCanGetVectors)
+// The nominals are fixed: known from instantiation on.
+HDJ_FMI3_VECTOR(fmi3GetNominalsOfContinuousStates, Nominals, kCanGetVectors | kInstantiated)
 #undef HDJ_FMI3_VECTOR
 
 fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance c, size_t* n) {
