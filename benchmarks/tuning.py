@@ -17,9 +17,9 @@ import itertools
 
 import numpy as np
 
-from . import _core
-from .metrics import error_figures
-from .parameters import for_estimator
+from hdjoint import _core
+from hdjoint.estimation.metrics import error_figures
+from hdjoint.io.parameters import for_estimator
 
 # Settings searched for the joint-state filter (tau_hat) and for the paper's UKF (tau_ukf).
 JOINT_FILTER_GRID = {

@@ -3,6 +3,7 @@
 #include "hdjoint/joint_plant.h"
 #include "hdjoint/sample_clock.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <map>
@@ -19,6 +20,7 @@ const char* causality_name(Causality c) {
         case Causality::Parameter: return "parameter";
         case Causality::Input: return "input";
         case Causality::Output: return "output";
+        case Causality::Local: return "local";
     }
     return "local";
 }
@@ -53,7 +55,7 @@ const std::map<std::string, BaseUnits>& unit_table() {
         {"N.m/A", {1, 2, -2, -1, 0}}, {"N.m/rad", {1, 2, -2, 0, -1}}, {"kg.m2", {1, 2, 0, 0, 0}},
         {"N.m.s/rad", {1, 2, -1, 0, -1}}, {"1/(N.m)", {-1, -2, 2, 0, 0}}, {"1/rad", {0, 0, 0, 0, -1}},
         {"1/s", {0, 0, -1, 0, 0}},
-        {"N.m/s", {1, 2, -3, 0, 0}},
+        {"N.m/s", {1, 2, -3, 0, 0}},      {"rad/s2", {0, 0, -2, 0, 1}},
     };
     return table;
 }
@@ -89,18 +91,28 @@ std::uint64_t fnv1a(const std::string& s, std::uint64_t seed) {
     return h;
 }
 
-// The 1-based indices of the inputs an output's initial value depends on.
-std::string initial_dependencies(const ModelInfo& info, const Variable& output) {
-    std::istringstream names(output.initial_dependencies);
-    std::string name, indices;
-    while (names >> name) {
-        std::size_t index = 0;
-        for (std::size_t i = 0; i < info.variables.size() && !index; ++i)
-            if (info.variables[i].name == name && info.variables[i].causality == Causality::Input) index = i + 1;
-        if (!index) throw std::runtime_error("output " + output.name + " depends on '" + name + "', not an input");
-        indices += (indices.empty() ? "" : " ") + std::to_string(index);
+// The variables named in `names` (space-separated), each as `reference(index)`
+// gives it (index: 0-based in info.variables); every one must have causality `of`.
+template <class Reference>
+std::string references(const ModelInfo& info, const Variable& dependent, const std::string& names, Causality of,
+                       Reference reference) {
+    std::istringstream in(names);
+    std::string name, list;
+    while (in >> name) {
+        std::size_t index = info.variables.size();
+        for (std::size_t i = 0; i < info.variables.size() && index == info.variables.size(); ++i)
+            if (info.variables[i].name == name && info.variables[i].causality == of) index = i;
+        if (index == info.variables.size())
+            throw std::runtime_error(dependent.name + " depends on '" + name + "', not a variable of that kind");
+        list += (list.empty() ? "" : " ") + reference(index);
     }
-    return indices;
+    return list;
+}
+
+// A variable's initial value: the inputs it depends on (FMI 2.0: 1-based indices).
+std::string initial_dependencies(const ModelInfo& info, const Variable& v) {
+    return references(info, v, v.initial_dependencies, Causality::Input,
+                      [](std::size_t i) { return std::to_string(i + 1); });
 }
 
 }  // namespace
@@ -120,28 +132,73 @@ std::string guid(const ModelInfo& info) {
     return buf;
 }
 
-std::string model_description_xml(const ModelInfo& info, const std::vector<std::string>& sources) {
+namespace {
+
+// The elements both versions write alike.
+std::string common_elements(const ModelInfo& info) {
     std::ostringstream x;
-    x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
-      << "<!-- Generated from the hdjoint parameter and variable tables; do not edit. -->\n"
-      << "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"" << info.model_name << "\" guid=\""
-      << guid(info) << "\"\n  description=\"" << escape(info.description)
-      << "\"\n  generationTool=\"hdjoint\" version=\"0.1.0\" variableNamingConvention=\"flat\""
-      << " numberOfEventIndicators=\"0\">\n";
-    x << "  <CoSimulation modelIdentifier=\"" << info.model_identifier
-      << "\" canHandleVariableCommunicationStepSize=\"true\" canInterpolateInputs=\"false\""
-      << " canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\">\n    <SourceFiles>\n";
-    for (const std::string& s : sources)
-        if (s.size() > 4 && s.substr(s.size() - 4) == ".cpp") x << "      <File name=\"" << escape(s) << "\"/>\n";
-    x << "    </SourceFiles>\n  </CoSimulation>\n";
     x << unit_definitions(info);
     x << "  <LogCategories>\n"
       << "    <Category name=\"logStatusWarning\" description=\"recoverable problems\"/>\n"
       << "    <Category name=\"logStatusError\" description=\"errors: bad input, illegal calls\"/>\n"
       << "    <Category name=\"logAll\" description=\"everything\"/>\n  </LogCategories>\n";
     x << "  <DefaultExperiment startTime=\"0\" stopTime=\"10\" stepSize=\"0.001\"/>\n";
+    return x.str();
+}
+
+std::string source_files(const std::vector<std::string>& sources, const char* element, const char* indent) {
+    std::string x;
+    for (const std::string& s : sources)
+        if (s.size() > 4 && s.substr(s.size() - 4) == ".cpp")
+            x += std::string(indent) + "<" + element + " name=\"" + escape(s) + "\"/>\n";
+    return x;
+}
+
+std::string bounds(const Variable& v) {
+    std::string x;
+    if (v.min > -1e299) x += " min=\"" + number(v.min) + "\"";
+    if (v.max < 1e299) x += " max=\"" + number(v.max) + "\"";
+    return x;
+}
+
+// An output's dependencies in the running model: none on the inputs (they act
+// inside doStep only), and in Model Exchange the states it is computed from.
+template <class Reference>
+std::string run_dependencies(const ModelInfo& info, const Variable& output, Reference reference) {
+    if (!info.model_exchange()) return "";
+    return references(info, output, output.state_dependencies, Causality::Local, reference);
+}
+
+bool is_state(const Variable& v) {
+    return v.causality == Causality::Local && v.value_reference >= kFirstStateReference &&
+           v.value_reference < kFirstDerivativeReference;
+}
+bool is_derivative(const Variable& v) { return v.derivative_of >= 0; }
+bool is_event_indicator(const Variable& v) {
+    return v.causality == Causality::Local && !is_state(v) && !is_derivative(v);
+}
+
+std::string fmi2_description(const ModelInfo& info, const std::vector<std::string>& sources) {
+    std::ostringstream x;
+    x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+      << "<!-- Generated from the hdjoint parameter and variable tables; do not edit. -->\n"
+      << "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"" << info.model_name << "\" guid=\""
+      << guid(info) << "\"\n  description=\"" << escape(info.description)
+      << "\"\n  generationTool=\"hdjoint\" version=\"0.1.0\" variableNamingConvention=\"flat\""
+      << " numberOfEventIndicators=\"" << info.event_indicators << "\">\n";
+    if (info.model_exchange())
+        x << "  <ModelExchange modelIdentifier=\"" << info.model_identifier
+          << "\" canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\">\n    <SourceFiles>\n"
+          << source_files(sources, "File", "      ") << "    </SourceFiles>\n  </ModelExchange>\n";
+    x << "  <CoSimulation modelIdentifier=\"" << info.model_identifier
+      << "\" canHandleVariableCommunicationStepSize=\"true\" canInterpolateInputs=\"false\""
+      << " canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\">\n    <SourceFiles>\n"
+      << source_files(sources, "File", "      ") << "    </SourceFiles>\n  </CoSimulation>\n";
+    x << common_elements(info);
     x << "  <ModelVariables>\n";
-    std::vector<std::size_t> outputs;
+    std::vector<std::size_t> outputs, derivatives, states;
+    std::map<unsigned, std::size_t> index_of;  // value reference -> 1-based index
+    for (std::size_t i = 0; i < info.variables.size(); ++i) index_of[info.variables[i].value_reference] = i + 1;
     for (std::size_t i = 0; i < info.variables.size(); ++i) {
         const Variable& v = info.variables[i];
         x << "    <!-- " << i + 1 << " -->\n    <ScalarVariable name=\"" << escape(v.name)
@@ -154,50 +211,130 @@ std::string model_description_xml(const ModelInfo& info, const std::vector<std::
                 x << " variability=\"continuous\" initial=\"calculated\"";
                 outputs.push_back(i + 1);
                 break;
+            case Causality::Local:
+                x << " variability=\"continuous\" initial=\"calculated\"";
+                if (is_state(v)) states.push_back(i + 1);
+                if (is_derivative(v)) derivatives.push_back(i + 1);
+                break;
         }
         x << "\n      description=\"" << escape(v.description) << "\">\n      <Real unit=\"" << escape(v.unit)
           << "\"";
-        if (v.causality != Causality::Output) x << " start=\"" << number(v.start) << "\"";
-        if (v.min > -1e299) x << " min=\"" << number(v.min) << "\"";
-        if (v.max < 1e299) x << " max=\"" << number(v.max) << "\"";
-        x << "/>\n    </ScalarVariable>\n";
+        if (v.causality == Causality::Parameter || v.causality == Causality::Input)
+            x << " start=\"" << number(v.start) << "\"";
+        if (is_derivative(v)) x << " derivative=\"" << index_of.at(static_cast<unsigned>(v.derivative_of)) << "\"";
+        x << bounds(v) << "/>\n    </ScalarVariable>\n";
     }
+    auto index = [](std::size_t i) { return std::to_string(i + 1); };
     x << "  </ModelVariables>\n  <ModelStructure>\n    <Outputs>\n";
     // Outputs change only inside doStep: no direct feedthrough from inputs,
     // so masters see no algebraic loop when a controller closes the loop.
-    for (std::size_t k : outputs) x << "      <Unknown index=\"" << k << "\" dependencies=\"\"/>\n";
-    x << "    </Outputs>\n    <InitialUnknowns>\n";
+    for (std::size_t k : outputs)
+        x << "      <Unknown index=\"" << k << "\" dependencies=\""
+          << run_dependencies(info, info.variables[k - 1], index) << "\"/>\n";
+    x << "    </Outputs>\n";
+    if (!derivatives.empty()) {
+        x << "    <Derivatives>\n";
+        for (std::size_t k : derivatives) x << "      <Unknown index=\"" << k << "\"/>\n";
+        x << "    </Derivatives>\n";
+    }
+    x << "    <InitialUnknowns>\n";
     // At initialisation an output may depend on start inputs: the table says
     // which (dependencies="" for none, so masters see no initialisation loop).
-    for (std::size_t k : outputs)
-        x << "      <Unknown index=\"" << k << "\" dependencies=\"" << initial_dependencies(info, info.variables[k - 1])
-          << "\"/>\n";
+    // The states and derivatives (Model Exchange) are computed there too.
+    std::vector<std::size_t> initial = outputs;
+    initial.insert(initial.end(), states.begin(), states.end());
+    initial.insert(initial.end(), derivatives.begin(), derivatives.end());
+    std::sort(initial.begin(), initial.end());
+    for (std::size_t k : initial) {
+        const Variable& v = info.variables[k - 1];
+        x << "      <Unknown index=\"" << k << "\" dependencies=\"" << initial_dependencies(info, v) << "\"/>\n";
+    }
     x << "    </InitialUnknowns>\n  </ModelStructure>\n</fmiModelDescription>\n";
     return x.str();
 }
 
-std::string build_description_xml(const ModelInfo& info, const std::vector<std::string>& sources) {
+std::string fmi3_description(const ModelInfo& info) {
+    std::ostringstream x;
+    x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+      << "<!-- Generated from the hdjoint parameter and variable tables; do not edit. -->\n"
+      << "<fmiModelDescription fmiVersion=\"3.0\" modelName=\"" << info.model_name << "\" instantiationToken=\""
+      << guid(info) << "\"\n  description=\"" << escape(info.description)
+      << "\"\n  generationTool=\"hdjoint\" version=\"0.1.0\" variableNamingConvention=\"flat\">\n";
+    if (info.model_exchange())
+        x << "  <ModelExchange modelIdentifier=\"" << info.model_identifier
+          << "\" canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\"/>\n";
+    x << "  <CoSimulation modelIdentifier=\"" << info.model_identifier
+      << "\" canHandleVariableCommunicationStepSize=\"true\" canGetAndSetFMUState=\"true\""
+      << " canSerializeFMUState=\"true\" hasEventMode=\"false\" canReturnEarlyAfterIntermediateUpdate=\"false\""
+      << " providesIntermediateUpdate=\"false\"/>\n";
+    x << common_elements(info);
+    x << "  <ModelVariables>\n";
+    x << "    <Float64 name=\"time\" valueReference=\"" << kTimeReference
+      << "\" causality=\"independent\" variability=\"continuous\" unit=\"s\" description=\"simulation time\"/>\n";
+    for (const Variable& v : info.variables) {
+        x << "    <Float64 name=\"" << escape(v.name) << "\" valueReference=\"" << v.value_reference
+          << "\" causality=\"" << causality_name(v.causality) << "\"";
+        switch (v.causality) {
+            case Causality::Parameter: x << " variability=\"fixed\" initial=\"exact\""; break;
+            case Causality::Input: x << " variability=\"continuous\""; break;
+            case Causality::Output:
+            case Causality::Local: x << " variability=\"continuous\" initial=\"calculated\""; break;
+        }
+        x << " unit=\"" << escape(v.unit) << "\"";
+        if (v.causality == Causality::Parameter || v.causality == Causality::Input)
+            x << " start=\"" << number(v.start) << "\"";
+        if (is_derivative(v)) x << " derivative=\"" << v.derivative_of << "\"";
+        x << bounds(v) << "\n      description=\"" << escape(v.description) << "\"/>\n";
+    }
+    auto reference = [&](std::size_t i) { return std::to_string(info.variables[i].value_reference); };
+    x << "  </ModelVariables>\n  <ModelStructure>\n";
+    for (const Variable& v : info.variables)
+        if (v.causality == Causality::Output)
+            x << "    <Output valueReference=\"" << v.value_reference << "\" dependencies=\""
+              << run_dependencies(info, v, reference) << "\"/>\n";
+    for (const Variable& v : info.variables)
+        if (is_derivative(v)) x << "    <ContinuousStateDerivative valueReference=\"" << v.value_reference << "\"/>\n";
+    for (const Variable& v : info.variables) {
+        if (v.causality != Causality::Output && !is_state(v) && !is_derivative(v)) continue;
+        x << "    <InitialUnknown valueReference=\"" << v.value_reference << "\" dependencies=\""
+          << references(info, v, v.initial_dependencies, Causality::Input, reference) << "\"/>\n";
+    }
+    for (const Variable& v : info.variables)
+        if (is_event_indicator(v)) x << "    <EventIndicator valueReference=\"" << v.value_reference << "\"/>\n";
+    x << "  </ModelStructure>\n</fmiModelDescription>\n";
+    return x.str();
+}
+
+}  // namespace
+
+std::string model_description_xml(const ModelInfo& info, const std::vector<std::string>& sources, int fmi_version) {
+    return fmi_version == 3 ? fmi3_description(info) : fmi2_description(info, sources);
+}
+
+std::string build_description_xml(const ModelInfo& info, const std::vector<std::string>& sources, int fmi_version) {
     std::ostringstream x;
     x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
       << "<fmiBuildDescription fmiVersion=\"3.0\">\n"
       << "  <BuildConfiguration modelIdentifier=\"" << info.model_identifier
       << "\" description=\"Rebuild from sources/: C++17, include directory sources/ (holds Eigen and the"
-      << " hdjoint headers); the FMI 2.0 headers come from the importing tool.\">\n"
+      << " hdjoint headers); the FMI " << fmi_version << ".0 headers come from the importing tool.\">\n"
       << "    <SourceFileSet language=\"C++17\">\n";
-    for (const std::string& s : sources)
-        if (s.size() > 4 && s.substr(s.size() - 4) == ".cpp") x << "      <SourceFile name=\"" << escape(s) << "\"/>\n";
+    x << source_files(sources, "SourceFile", "      ");
     x << "    </SourceFileSet>\n  </BuildConfiguration>\n</fmiBuildDescription>\n";
     return x.str();
 }
 
-std::string documentation_html(const ModelInfo& info) {
+std::string documentation_html(const ModelInfo& info, int fmi_version) {
+    const std::string error = fmi_version == 3 ? "fmi3Error" : "fmi2Error";
+    const std::string warning = fmi_version == 3 ? "fmi3Warning" : "fmi2Warning";
     std::ostringstream h;
     h << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>" << info.model_name
       << "</title>\n<style>body{font-family:sans-serif;max-width:60em;margin:2em auto}"
       << "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:.2em .5em;text-align:left}"
       << "code{background:#f4f4f4}</style></head><body>\n<h1>" << info.model_name << "</h1>\n<p>"
       << escape(info.description) << "</p>\n"
-      << "<p>FMI 2.0 Co-Simulation, built by <code>hdjoint</code>. Physics: Yu et al. 2018, eq. (1)-(31), with"
+      << "<p>FMI " << fmi_version << ".0 " << (info.model_exchange() ? "Model Exchange and " : "")
+      << "Co-Simulation, built by <code>hdjoint</code>. Physics: Yu et al. 2018, eq. (1)-(31), with"
       << " the sign conventions <code>dtheta = theta_m/N - theta_l</code>, <code>dtheta_f = dtheta - wg(tau_w)"
       << " - theta_err</code>, <code>tau_f = tan(Cf*Kf*dtheta_f)/Cf</code>. The C++ sources are in"
       << " <code>sources/</code> (rebuild with <code>sources/buildDescription.xml</code>, include directory"
@@ -211,15 +348,15 @@ std::string documentation_html(const ModelInfo& info) {
         h << "</td><td>" << escape(v.description) << "</td></tr>\n";
     }
     h << "</table>\n<h2>Errors</h2><p>Non-finite inputs, parameters outside their range, a torsion beyond the"
-      << " atan law's asymptote and calls out of the FMI state machine return <code>fmi2Error</code> with a"
+      << " atan law's asymptote and calls out of the FMI state machine return <code>" << error << "</code> with a"
       << " message through the logger naming the variable and value; recoverable filter problems return"
-      << " <code>fmi2Warning</code>.</p>\n<h2>Step size</h2><p>A <code>doStep</code> may run at most "
+      << " <code>" << warning << "</code>.</p>\n<h2>Step size</h2><p>A <code>doStep</code> may run at most "
       << hdjoint::SampleClock::kMaxSamplesPerStep << " samples of a sampled model (estimator, controller) or "
       << number(hdjoint::JointPlant::kMaxSubstepsPerAdvance) << " integration substeps of the joint; a longer"
-      << " step is refused whole with <code>fmi2Error</code> (split it into shorter ones).</p>\n"
+      << " step is refused whole with <code>" << error << "</code> (split it into shorter ones).</p>\n"
       << "<h2>FMU state</h2><p>Serialised states carry this FMU's own magic number and state version; a state"
       << " of another FMU or version, a field that is not finite or outside its range, and a state-machine value"
-      << " that the model cannot be in are refused with <code>fmi2Error</code> naming the field.</p>\n"
+      << " that the model cannot be in are refused with <code>" << error << "</code> naming the field.</p>\n"
       << "</body></html>\n";
     return h.str();
 }

@@ -11,8 +11,9 @@
 namespace hdjoint::fmu {
 
 std::string guid(const ModelInfo& info);
-std::string model_description_xml(const ModelInfo& info, const std::vector<std::string>& sources);
-std::string build_description_xml(const ModelInfo& info, const std::vector<std::string>& sources);
-std::string documentation_html(const ModelInfo& info);
+// fmi_version: 2 or 3 (the FMU's two builds describe the same model).
+std::string model_description_xml(const ModelInfo& info, const std::vector<std::string>& sources, int fmi_version);
+std::string build_description_xml(const ModelInfo& info, const std::vector<std::string>& sources, int fmi_version);
+std::string documentation_html(const ModelInfo& info, int fmi_version);
 
 }  // namespace hdjoint::fmu

@@ -27,10 +27,10 @@ std::vector<Variable> signal_variables(const SignalTable<In, Out>& table) {
     unsigned next_input = kFirstInputReference, next_output = kFirstOutputReference;
     for (const Signal<In, Out>& s : table) {
         if (s.kind == SignalKind::Input)
-            vars.push_back({s.name, next_input++, Causality::Input, s.unit, s.description, 0.0, -inf, inf, ""});
+            vars.push_back({s.name, next_input++, Causality::Input, s.unit, s.description, 0.0, -inf, inf, "", -1, ""});
         else if (s.kind == SignalKind::Output)
             vars.push_back({s.name, next_output++, Causality::Output, s.unit, s.description, 0.0, -inf, inf,
-                            s.initial_dependencies});
+                            s.initial_dependencies, -1, ""});
     }
     return vars;
 }
@@ -42,7 +42,7 @@ std::vector<Variable> parameter_variables(Keep keep) {
     for (unsigned i = 0; i < ParameterRows<Params>::count(); ++i) {
         const auto& p = ParameterRows<Params>::table()[i];
         if (keep(p))
-            vars.push_back({p.name, i, Causality::Parameter, p.unit, p.description, p.default_value, p.min, p.max, ""});
+            vars.push_back({p.name, i, Causality::Parameter, p.unit, p.description, p.default_value, p.min, p.max, "", -1, ""});
     }
     return vars;
 }

@@ -78,10 +78,19 @@ bool JointPlant::initialize(double tau_ext, std::string* message) {
 
 bool JointPlant::joint_torque(const PlantState& x, double* tau) const { return torque(x, z_, tau); }
 
-bool JointPlant::torque(const PlantState& x, const Vector<3>& z, double* tau) const {
+// The elastic torque of the chain; beyond the torsion asymptote none, or,
+// when `saturate`, the transmission's largest torque (see derivative()).
+bool JointPlant::elastic_torque(double elastic, double* tau_f, bool saturate) const {
+    if (transmitted_torque(elastic, p_, tau_f)) return true;
+    if (!saturate || !std::isfinite(elastic)) return false;
+    *tau_f = std::copysign(kSaturatedTorque, elastic);
+    return true;
+}
+
+bool JointPlant::torque(const PlantState& x, const Vector<3>& z, double* tau, bool saturate) const {
     const double elastic = total_torsion(x(kThetaM), x(kThetaL), p_) - kinematic_error(x(kThetaM), x(kThetaL), p_);
     double tau_f = 0.0;
-    if (!transmitted_torque(elastic, p_, &tau_f)) return false;
+    if (!elastic_torque(elastic, &tau_f, saturate)) return false;
     double dk_dm = 0.0, dk_dl = 0.0;
     if (p_.Df != 0.0) kinematic_error_gradient(x(kThetaM), x(kThetaL), p_, &dk_dm, &dk_dl);
     // Damping of the deformation only: the kinematic error's share of the
@@ -117,18 +126,19 @@ PlantFullState JointPlant::full_state() const {
 }
 
 bool JointPlant::derivative(const PlantFullState& x, double t, const PlantInputs& in, PlantFullState* dx,
-                            PlantJacobian* J) const {
-    return model<kPlantStates>(x, t, in, dx, J);
+                            PlantJacobian* J, bool saturate) const {
+    return model<kPlantStates>(x, t, in, dx, J, saturate);
 }
 
 template <int S>
-bool JointPlant::model(const Vector<S>& x, double t, const PlantInputs& in, Vector<S>* dx, Matrix<S>* J) const {
+bool JointPlant::model(const Vector<S>& x, double t, const PlantInputs& in, Vector<S>* dx, Matrix<S>* J,
+                       bool saturate) const {
     static_assert(S == 4 || S == kPlantStates, "the plant has 4 mechanical and 3 effect states");
     constexpr bool kFull = S == kPlantStates;
     const double theta_m = x(kThetaM), omega_m = x(kOmegaM), theta_l = x(kThetaL), omega_l = x(kOmegaL);
     const double elastic = total_torsion(theta_m, theta_l, p_) - kinematic_error(theta_m, theta_l, p_);
     double tau_f = 0.0;
-    if (!transmitted_torque(elastic, p_, &tau_f)) return false;
+    if (!elastic_torque(elastic, &tau_f, saturate)) return false;
     const double scale = plant_friction_scale(t, p_);
     const bool dahl = kFull && p_.hys_H > 0.0, bouc_wen = kFull && p_.bw_A > 0.0;
     const bool lugre = kFull && p_.lugre_sigma0 > 0.0;
@@ -312,15 +322,25 @@ bool JointPlant::substep(double h, const PlantInputs& in, int depth, std::string
     return substep(0.5 * h, in, depth + 1, message) && substep(0.5 * h, in, depth + 1, message);
 }
 
-PlantOutputs JointPlant::outputs() const {
+PlantOutputs JointPlant::outputs(bool saturate) const {
     PlantOutputs o;
     o.theta_m = quantise(x_(kThetaM), p_.motor_counts);
     o.theta_l = quantise(x_(kThetaL), p_.link_counts);
     o.omega_m = x_(kOmegaM);
     o.omega_link = x_(kOmegaL);
     double tau = 0.0;
-    o.tau_joint = joint_torque(x_, &tau) ? tau : std::nan("");
+    o.tau_joint = torque(x_, z_, &tau, saturate) ? tau : std::nan("");
     return o;
+}
+
+Vector<JointPlant::kEventIndicators> JointPlant::event_indicators() const {
+    Vector<kEventIndicators> z = Vector<kEventIndicators>::Ones();
+    if (p_.backlash > 0.0) {
+        const double elastic =
+            total_torsion(x_(kThetaM), x_(kThetaL), p_) - kinematic_error(x_(kThetaM), x_(kThetaL), p_);
+        z << elastic - 0.5 * p_.backlash, elastic + 0.5 * p_.backlash;
+    }
+    return z;
 }
 
 PlantInternals JointPlant::internals() const {

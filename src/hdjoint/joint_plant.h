@@ -82,7 +82,8 @@ public:
     // or h needs more than kMaxSubstepsPerAdvance substeps.
     bool advance(double h, const PlantInputs& in, std::string* message = nullptr);
 
-    PlantOutputs outputs() const;
+    // `saturate`: with the transmitted torque held as derivative(..., true) holds it.
+    PlantOutputs outputs(bool saturate = false) const;
     const PlantState& state() const { return x_; }
     PlantFullState full_state() const;
     double time() const { return t_; }  // since initialize(); drives the friction drift and warm-up
@@ -106,18 +107,41 @@ public:
     std::vector<double> save_state() const { return save_fields(*this); }
     bool load_state(const std::vector<double>& data) { return load_fields(*this, data); }
 
+    // Model Exchange: a solver moves the state and the clock itself and asks
+    // for derivative(); these place the plant where it asks (no checks: the
+    // derivative reports a state outside the model's domain).
+    void set_full_state(const PlantFullState& x) {
+        x_ = x.head<4>();
+        z_ = x.tail<3>();
+    }
+    void set_time(double t) { t_ = t; }
+    // The state events (plant_signals.def, HDJ_PLANT_EVENT_INDICATORS): the
+    // backlash's two contact edges, each a constant 1 without backlash.
+    static constexpr int kEventIndicators = 2;
+    Vector<kEventIndicators> event_indicators() const;
+
     // State derivative at time t (since initialize) and its Jacobian by the
     // state (analytic; public so tests can check it against differences).
+    // `saturate` (Model Exchange): beyond the torsion asymptote, where the
+    // integrator's own substeps fail and are retried in halves, the
+    // transmitted torque is held at +-kSaturatedTorque instead, so that a
+    // solver's trial point there gets a finite, enormous restoring torque and
+    // its error test rejects the step (a solver through fmpy cannot be told
+    // to retry a failed right-hand side).
     bool derivative(const PlantFullState& x, double t, const PlantInputs& in, PlantFullState* dx,
-                    PlantJacobian* J) const;
+                    PlantJacobian* J, bool saturate = false) const;
+    // The transmission's largest torque (transmitted_torque's bracket), N.m.
+    static constexpr double kSaturatedTorque = 1e12;
 
 private:
     // The model on S = 4 (mechanical) or S = 7 (all) states.
     template <int S>
-    bool model(const Vector<S>& x, double t, const PlantInputs& in, Vector<S>* dx, Matrix<S>* J) const;
+    bool model(const Vector<S>& x, double t, const PlantInputs& in, Vector<S>* dx, Matrix<S>* J,
+               bool saturate = false) const;
     template <int S>
     bool ros2_step(double h, const PlantInputs& in, std::string* message);
-    bool torque(const PlantState& x, const Vector<3>& z, double* tau) const;
+    bool torque(const PlantState& x, const Vector<3>& z, double* tau, bool saturate = false) const;
+    bool elastic_torque(double elastic, double* tau_f, bool saturate) const;
     bool within_bounds(const Vector<3>& z, double h) const;
     bool extra_states() const { return p_.hys_H > 0.0 || p_.bw_A > 0.0 || p_.lugre_sigma0 > 0.0; }
     bool substep(double h, const PlantInputs& in, int depth, std::string* message);

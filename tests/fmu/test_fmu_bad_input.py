@@ -300,7 +300,8 @@ def test_wrong_guid_is_refused_at_instantiation(unzipped):
 
 
 def test_model_exchange_and_empty_name_are_refused(unzipped):
-    s = Slave(unzipped[JOINT], "x", instantiate=False)
+    """Model Exchange only where the model has continuous states: the joint, not the estimator."""
+    s = Slave(unzipped[ESTIMATOR], "x", instantiate=False)
     instantiate = s.slave.fmi2Instantiate  # raw: returns the component or None
     guid = s.description.guid.encode()
     callbacks = ctypes.byref(s.callbacks())
@@ -308,6 +309,11 @@ def test_model_exchange_and_empty_name_are_refused(unzipped):
     assert "Co-Simulation" in last_error(s)
     assert instantiate(b"", 1, guid, b"file:///", callbacks, 0, 0) is None
     assert "instanceName" in last_error(s)
+    j = Slave(unzipped[JOINT], "j", instantiate=False)
+    component = j.slave.fmi2Instantiate(b"j", 0, j.description.guid.encode(), b"file:///",
+                                        ctypes.byref(j.callbacks()), 0, 0)
+    assert component is not None
+    j.slave.fmi2FreeInstance(component)
 
 
 # ---------------------------------------------------------------- states that do not fit

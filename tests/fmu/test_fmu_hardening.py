@@ -273,8 +273,11 @@ def initial_dependencies(name) -> dict[str, list[str]]:
     deps = {}
     for u in root.find("ModelStructure").find("InitialUnknowns").findall("Unknown"):
         assert "dependencies" in u.attrib, u.attrib
+        unknown = variables[int(u.attrib["index"]) - 1]
+        if unknown.get("causality") != "output":  # Model Exchange's states and derivatives (the joint)
+            continue
         indices = [int(k) for k in u.attrib["dependencies"].split()]
-        deps[variables[int(u.attrib["index"]) - 1].get("name")] = [variables[k - 1].get("name") for k in indices]
+        deps[unknown.get("name")] = [variables[k - 1].get("name") for k in indices]
     return deps
 
 

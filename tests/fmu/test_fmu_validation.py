@@ -58,13 +58,17 @@ CONTRACT_SHARED = ["N", "Kt", "Jm", "Bm", "Fc", "Kf", "Cf", "Kw", "Cw", "a0", "a
 CONTRACT_PLANT_ONLY = []
 CONTRACT_ESTIMATOR_ONLY = ["ukf_alpha", "ukf_beta", "ukf_kappa"]
 
+# HarmonicDriveJoint's Model Exchange variables (plant_signals.def: HDJ_PLANT_STATES, HDJ_PLANT_EVENT_INDICATORS).
+ME_STATES = ("motor_angle", "motor_speed", "link_angle", "link_speed", "z_dahl", "z_bouc_wen", "z_lugre")
+ME_LOCALS = (*ME_STATES, *(f"der({s})" for s in ME_STATES), "backlash_upper", "backlash_lower")
+
 # SI base-unit exponents (kg, m, s, A, rad) of the units the contract uses.
 BASE_UNITS = {
     "A": dict(A=1), "rad": dict(rad=1), "rad/s": dict(rad=1, s=-1), "N.m": dict(kg=1, m=2, s=-2),
     "s": dict(s=1), "N.m/A": dict(kg=1, m=2, s=-2, A=-1), "N.m/rad": dict(kg=1, m=2, s=-2, rad=-1),
     "kg.m2": dict(kg=1, m=2), "N.m.s/rad": dict(kg=1, m=2, s=-1, rad=-1), "1/(N.m)": dict(kg=-1, m=-2, s=2),
     "1/rad": dict(rad=-1), "1": {}, "1/s": dict(s=-1),
-    "N.m/s": dict(kg=1, m=2, s=-3),
+    "N.m/s": dict(kg=1, m=2, s=-3), "rad/s2": dict(rad=1, s=-2),
 }
 
 
@@ -90,7 +94,9 @@ def test_validate_fmu_reports_no_problems(fmu):
 def test_model_identifier_and_fmi_version(fmu):
     name, path, md = fmu
     assert md.fmiVersion == "2.0"
-    assert md.coSimulation is not None and md.modelExchange is None
+    assert md.coSimulation is not None
+    # Model Exchange: the joint only (its continuous states; tests/fmu/test_model_exchange.py).
+    assert (md.modelExchange is not None) == (name == JOINT)
     assert md.coSimulation.modelIdentifier == name
     assert md.modelName == name
     assert path.name == f"{name}.fmu"
@@ -113,7 +119,10 @@ def test_inputs_and_outputs_match_contract(fmu):
     assert outputs <= {n for n, (c, _) in allowed.items() if c == "output"}, outputs
     for var in outputs:
         assert v[var].unit == allowed[var][1]
-    assert not [n for n, x in v.items() if x.causality not in ("input", "output", "parameter")]
+    # Beyond those, only the joint's Model Exchange states, derivatives and event indicators, as locals.
+    me = set(ME_LOCALS) if name == JOINT else set()
+    assert {n for n, x in v.items() if x.causality not in ("input", "output", "parameter")} == me
+    assert all(v[n].causality == "local" for n in me)
 
 
 def test_outputs_are_calculated_and_continuous(fmu):
@@ -191,8 +200,10 @@ def test_model_structure_lists_every_output(fmu):
     _, _, md = fmu
     outputs = [v.name for v in md.modelVariables if v.causality == "output"]
     assert [u.variable.name for u in md.outputs] == outputs
-    # FMI 2.0: outputs with initial="calculated" must appear in InitialUnknowns.
-    assert [u.variable.name for u in md.initialUnknowns] == outputs
+    # FMI 2.0: outputs with initial="calculated" must appear in InitialUnknowns, and
+    # in Model Exchange the states and their derivatives too.
+    me = [v.name for v in md.modelVariables if v.name in ME_STATES or v.name.startswith("der(")]
+    assert [u.variable.name for u in md.initialUnknowns] == outputs + me
     # Outputs change only in doStep: no direct feedthrough from an input.
     for u in md.outputs:
         assert all(d.causality != "input" for d in (u.dependencies or [])), u.variable.name

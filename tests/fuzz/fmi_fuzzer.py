@@ -1,4 +1,5 @@
-"""A call-sequence fuzzer for the project's FMI 2.0 Co-Simulation FMUs.
+"""A call-sequence fuzzer for the project's FMUs: FMI 2.0 and FMI 3.0,
+Co-Simulation and (the joint) Model Exchange.
 
 Each sequence runs in a forked child process (the FMU's binary is loaded
 once in the parent, so a child starts in milliseconds); a child that dies is
@@ -8,7 +9,9 @@ a loaded machine, which slows the wall clock, cannot fake a hang; a wall-clock
 backstop (BACKSTOP_FACTOR times the budget) catches a child that blocks
 without computing. Inside the child a
 model of the FMI 2.0 state machine (the co-simulation state table) says
-whether each call is legal, so the fuzzer can tell:
+whether each call is legal (one table per FMI version and interface: the
+same call names -- "setup", "enter", "step", "settime", ... -- map to each
+version's functions), so the fuzzer can tell:
 
     crash                     the child died on a signal or exited abnormally
     hang                      the sequence used more than its CPU budget, or
@@ -43,8 +46,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import fmpy
-from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+from fmpy.fmi2 import (FMU2Model, FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
                        fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+from fmpy.fmi3 import FMU3Model, FMU3Slave, fmi3LogMessageCallback
 
 CATEGORIES = ("crash", "hang", "illegal call accepted", "corrupted state accepted", "non-finite output")
 OK, WARNING, DISCARD, ERROR, FATAL = range(5)
@@ -67,6 +71,28 @@ ALLOWED = {
     "getstate": NOT_FATAL, "setstate": NOT_FATAL, "freestate": NOT_FATAL,
     "serialize": NOT_FATAL, "deserialize": NOT_FATAL,
 }
+# Model Exchange's calls (FMI 2.0 section 3.2.3, FMI 3.0 section 3.2): illegal in Co-Simulation.
+EVENT, CT = "event mode", "continuous-time mode"
+ME_CALLS = ("enterct", "enterevent", "update", "completed", "settime", "setx", "getx", "getdx", "getz")
+ALLOWED.update({call: set() for call in ME_CALLS})
+ALLOWED_ME = {
+    **ALLOWED,
+    "terminate": {EVENT, CT},
+    "reset": NOT_FATAL | {EVENT, CT},
+    "get": {INIT, EVENT, CT, TERMINATED, ERROR_STATE},
+    "set": {INSTANTIATED, INIT, EVENT, CT},
+    "step": set(), "status": set(),
+    **{call: NOT_FATAL | {EVENT, CT} for call in ("getstate", "setstate", "freestate", "serialize", "deserialize")},
+    "enterct": {EVENT}, "enterevent": {CT}, "update": {EVENT}, "completed": {CT},
+    "settime": {EVENT, CT}, "setx": {CT}, "getx": {INIT, EVENT, CT, TERMINATED},
+    "getdx": {INIT, EVENT, CT, TERMINATED}, "getz": {INIT, EVENT, CT, TERMINATED},
+}
+# FMI 3.0 (no separate setup: "setup" only notes the times "enter" passes; "status" is
+# fmi3EnterConfigurationMode, illegal for an FMU without structural parameters).
+ALLOWED_3 = {**ALLOWED, "setup": NOT_FATAL, "status": set(),
+             "get": ALLOWED["get"] | {INSTANTIATED}}
+ALLOWED_3_ME = {**ALLOWED_ME, "setup": NOT_FATAL | {EVENT, CT}, "get": ALLOWED_ME["get"] | {INSTANTIATED}}
+TABLES = {(2, False): ALLOWED, (2, True): ALLOWED_ME, (3, False): ALLOWED_3, (3, True): ALLOWED_3_ME}
 # Where the standard's wording leaves doubt: neither accepting nor refusing is a finding.
 UNSETTLED = {"status": {INIT}}
 # Serialised layout (fmu/fmi2_glue.cpp): doubles, sealed by a CRC-32 in the last one.
@@ -93,61 +119,99 @@ class Variable:
 
 
 class LoadedFmu:
-    """An FMU extracted and its binary loaded, in the parent, ready to fork from."""
+    """An FMU extracted and its binary loaded, in the parent, ready to fork from; instantiated
+    for Model Exchange when MODEL_EXCHANGE (its name then ends in "_me")."""
 
-    def __init__(self, path: Path, workdir: Path):
+    def __init__(self, path: Path, workdir: Path, model_exchange: bool = False):
         self.path = Path(path)
-        self.name = self.path.stem
+        self.model_exchange = model_exchange
+        self.name = self.path.stem + ("_me" if model_exchange else "")
         self.unzipdir = fmpy.extract(str(self.path), str(Path(workdir) / self.name),
                                      include=lambda n: not n.startswith("sources/"))
         md = fmpy.read_model_description(self.unzipdir)
+        self.fmi = 3 if md.fmiVersion.startswith("3") else 2
+        self.allowed = TABLES[(self.fmi, model_exchange)]
+        self.n_states = md.numberOfContinuousStates if model_exchange else 0
+        self.n_indicators = md.numberOfEventIndicators if model_exchange else 0
+        self.foreign_names: list[str] = []  # the other loaded FMUs (set by Campaign.load)
         self.guid = md.guid
         self.identifier = md.coSimulation.modelIdentifier
         self.variables = [Variable(v.name, v.valueReference, v.causality,
                                    float(v.start) if v.start is not None else 0.0,
                                    float(v.min) if v.min is not None else -math.inf,
                                    float(v.max) if v.max is not None else math.inf)
-                          for v in md.modelVariables]
+                          for v in md.modelVariables if v.causality != "independent"]
         self.outputs = [v for v in self.variables if v.causality == "output"]
         self.settable = [v for v in self.variables if v.causality in ("input", "parameter")]
-        self.slave = FMU2Slave(guid=self.guid, unzipDirectory=self.unzipdir, modelIdentifier=self.identifier,
-                               instanceName="fuzz")
+        kind = {(2, False): FMU2Slave, (2, True): FMU2Model, (3, False): FMU3Slave, (3, True): FMU3Model}
+        self.slave = kind[(self.fmi, model_exchange)](guid=self.guid, unzipDirectory=self.unzipdir,
+                                                      modelIdentifier=self.identifier, instanceName="fuzz")
         self.dll = self.slave.dll
         self.ts = next((v.start for v in self.variables if v.name == "Ts"), 1e-3)
         self.serialised_sample: bytes = b""  # an initialised state, given to the OTHER FMUs as foreign
 
 
-def _messages_logger(messages: list):
+def _messages_logger(messages: list, fmi: int):
+    if fmi == 3:
+        def log3(env, status, category, message):
+            messages.append(message.decode("utf-8", "replace"))
+        return fmi3LogMessageCallback(log3)
+
     def log(env, instance, status, category, message):
         messages.append(message.decode("utf-8", "replace"))
     return fmi2CallbackLoggerTYPE(log)
 
 
-class Calls:
-    """The FMI functions of one binary with raw statuses (fmpy's wrappers raise instead)."""
+_c, _d, _sz = ctypes.c_void_p, ctypes.c_double, ctypes.c_size_t
+_i, _b, _pd = ctypes.c_int, ctypes.c_bool, ctypes.POINTER(ctypes.c_double)
+_pu, _pc = ctypes.POINTER(ctypes.c_uint), ctypes.POINTER(ctypes.c_void_p)
+# Each version's functions (without the fmi2/fmi3 prefix) and their arguments.
+SIGNATURES = {
+    2: {"SetupExperiment": [_c, _i, _d, _d, _i, _d], "EnterInitializationMode": [_c],
+        "ExitInitializationMode": [_c], "Terminate": [_c], "Reset": [_c],
+        "GetReal": [_c, _pu, _sz, _pd], "SetReal": [_c, _pu, _sz, _pd], "DoStep": [_c, _d, _d, _i],
+        "GetFMUstate": [_c, _pc], "SetFMUstate": [_c, _c], "FreeFMUstate": [_c, _pc],
+        "SerializedFMUstateSize": [_c, _c, ctypes.POINTER(_sz)], "SerializeFMUstate": [_c, _c, ctypes.c_char_p, _sz],
+        "DeSerializeFMUstate": [_c, ctypes.c_char_p, _sz, _pc],
+        "GetRealStatus": [_c, _i, _pd], "GetBooleanStatus": [_c, _i, ctypes.POINTER(_i)],
+        "GetStatus": [_c, _i, ctypes.POINTER(_i)],
+        "EnterContinuousTimeMode": [_c], "EnterEventMode": [_c], "NewDiscreteStates": [_c, ctypes.c_char_p],
+        "CompletedIntegratorStep": [_c, _i, ctypes.POINTER(_i), ctypes.POINTER(_i)], "SetTime": [_c, _d],
+        "SetContinuousStates": [_c, _pd, _sz], "GetContinuousStates": [_c, _pd, _sz],
+        "GetDerivatives": [_c, _pd, _sz], "GetEventIndicators": [_c, _pd, _sz]},
+    3: {"EnterInitializationMode": [_c, _b, _d, _d, _b, _d], "ExitInitializationMode": [_c], "Terminate": [_c],
+        "Reset": [_c], "GetFloat64": [_c, _pu, _sz, _pd, _sz], "SetFloat64": [_c, _pu, _sz, _pd, _sz],
+        "DoStep": [_c, _d, _d, _b, ctypes.POINTER(_b), ctypes.POINTER(_b), ctypes.POINTER(_b), _pd],
+        "GetFMUState": [_c, _pc], "SetFMUState": [_c, _c], "FreeFMUState": [_c, _pc],
+        "SerializedFMUStateSize": [_c, _c, ctypes.POINTER(_sz)], "SerializeFMUState": [_c, _c, ctypes.c_char_p, _sz],
+        "DeserializeFMUState": [_c, ctypes.c_char_p, _sz, _pc], "EnterConfigurationMode": [_c],
+        "EnterContinuousTimeMode": [_c], "EnterEventMode": [_c],
+        "UpdateDiscreteStates": [_c] + [ctypes.POINTER(_b)] * 5 + [_pd],
+        "CompletedIntegratorStep": [_c, _b, ctypes.POINTER(_b), ctypes.POINTER(_b)], "SetTime": [_c, _d],
+        "SetContinuousStates": [_c, _pd, _sz], "GetContinuousStates": [_c, _pd, _sz],
+        "GetContinuousStateDerivatives": [_c, _pd, _sz], "GetEventIndicators": [_c, _pd, _sz]},
+}
+# FMI 2.0 names of the calls whose FMI 3.0 name differs.
+FMI3_NAMES = {"GetReal": "GetFloat64", "SetReal": "SetFloat64", "GetFMUstate": "GetFMUState",
+              "SetFMUstate": "SetFMUState", "FreeFMUstate": "FreeFMUState",
+              "SerializedFMUstateSize": "SerializedFMUStateSize", "SerializeFMUstate": "SerializeFMUState",
+              "DeSerializeFMUstate": "DeserializeFMUState", "GetDerivatives": "GetContinuousStateDerivatives"}
 
-    def __init__(self, dll):
-        c, d, sz = ctypes.c_void_p, ctypes.c_double, ctypes.c_size_t
-        i, pd, pu = ctypes.c_int, ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_uint)
+
+class Calls:
+    """The FMI functions of one binary with raw statuses (fmpy's wrappers raise instead), by their
+    FMI 2.0 names without the prefix (calls.GetReal is fmi3GetFloat64 in an FMI 3.0 binary)."""
+
+    def __init__(self, dll, fmi: int = 2):
+        self.fmi = fmi
         self.f = {}
-        for name, args in {
-            "fmi2SetupExperiment": [c, i, d, d, i, d], "fmi2EnterInitializationMode": [c],
-            "fmi2ExitInitializationMode": [c], "fmi2Terminate": [c], "fmi2Reset": [c],
-            "fmi2GetReal": [c, pu, sz, pd], "fmi2SetReal": [c, pu, sz, pd], "fmi2DoStep": [c, d, d, i],
-            "fmi2GetFMUstate": [c, ctypes.POINTER(c)], "fmi2SetFMUstate": [c, c],
-            "fmi2FreeFMUstate": [c, ctypes.POINTER(c)],
-            "fmi2SerializedFMUstateSize": [c, c, ctypes.POINTER(sz)],
-            "fmi2SerializeFMUstate": [c, c, ctypes.c_char_p, sz],
-            "fmi2DeSerializeFMUstate": [c, ctypes.c_char_p, sz, ctypes.POINTER(c)],
-            "fmi2GetRealStatus": [c, i, pd], "fmi2GetBooleanStatus": [c, i, ctypes.POINTER(i)],
-            "fmi2GetStatus": [c, i, ctypes.POINTER(i)],
-        }.items():
-            fn = dll[name]
+        for name, args in SIGNATURES[fmi].items():
+            fn = dll[f"fmi{fmi}{name}"]
             fn.argtypes, fn.restype = args, ctypes.c_int
             self.f[name] = fn
 
     def __getattr__(self, name):
-        return self.f["fmi2" + name]
+        return self.f[FMI3_NAMES.get(name, name) if self.fmi == 3 else name]
 
 
 @dataclass
@@ -164,6 +228,7 @@ class Model:
     state: str = INSTANTIATED
     time: float = 0.0
     stop: float | None = None
+    start: float = 0.0
     tainted: bool = False  # after an accepted illegal call or an unchecked state: legality unknown
 
 
@@ -172,9 +237,11 @@ class Child:
 
     def __init__(self, fmu: LoadedFmu, foreign: dict[str, bytes], report):
         self.fmu, self.foreign, self.report = fmu, foreign, report
-        self.calls = Calls(fmu.dll)
+        self.calls = Calls(fmu.dll, fmu.fmi)
         self.messages: list[str] = []
-        self._logger = _messages_logger(self.messages)
+        self._logger = _messages_logger(self.messages, fmu.fmi)
+        self._pending = (0.0, None)  # FMI 3.0: the times "enter" passes
+        self._x: list[float] | None = None  # Model Exchange: the states last read
         self.component = None
         self.model = Model()
         self.handles: dict[int, tuple[ctypes.c_void_p, Snapshot]] = {}
@@ -184,6 +251,13 @@ class Child:
 
     # -- the instance --------------------------------------------------------------------
     def instantiate(self):
+        if self.fmu.fmi == 3:
+            self.fmu.slave.instantiate(logMessage=lambda env, status, category, message:
+                                       self.messages.append(message.decode("utf-8", "replace")))
+            self.component = self.fmu.slave.component
+            self.model = Model()
+            self.handles.clear()
+            return
         cb = fmi2CallbackFunctions()
         cb.logger = self._logger
         cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(fmpy.calloc)
@@ -201,7 +275,7 @@ class Child:
 
     def free(self):
         # Not fmpy's freeInstance: it also unloads the binary, which later calls still use.
-        self.fmu.slave.fmi2FreeInstance(self.component)
+        getattr(self.fmu.slave, f"fmi{self.fmu.fmi}FreeInstance")(self.component)
         self.component = None
 
     # -- one call ----------------------------------------------------------------------
@@ -223,7 +297,7 @@ class Child:
         m = self.model
         if m.state == FATAL_STATE:
             return []
-        legal = m.state in ALLOWED[kind]
+        legal = m.state in self.fmu.allowed[kind]
         findings = []
         if m.state in UNSETTLED.get(kind, ()):
             legal = None
@@ -240,7 +314,7 @@ class Child:
             m.state = FATAL_STATE
         elif status >= ERROR:
             m.state = ERROR_STATE
-        elif kind == "get" and status == OK and m.state != ERROR_STATE:
+        elif kind in ("get", "getx", "getdx", "getz") and status == OK and m.state != ERROR_STATE:
             bad = [n for n, v in self._last_values.items() if not math.isfinite(v)]
             if bad:
                 findings.append(("non-finite output", f"{op}: {bad} after fmi2OK in state '{m.state}'"))
@@ -253,16 +327,27 @@ class Child:
         m, kind = self.model, op[0]
         if status >= ERROR:
             return
-        if kind == "setup":
-            m.time, m.stop = op[1], op[2]
+        if kind == "setup" and self.fmu.fmi == 2:
+            m.start, m.stop = op[1], op[2]
+            m.time = m.start
         elif kind == "enter":
             m.state = INIT
+            if self.fmu.fmi == 3:
+                m.start, m.stop = self._pending
+                m.time = m.start
         elif kind == "exit":
-            m.state = STEP_COMPLETE
+            m.state = EVENT if self.fmu.model_exchange else STEP_COMPLETE
+        elif kind == "enterct":
+            m.state = CT
+        elif kind == "enterevent":
+            m.state = EVENT
+        elif kind == "settime":
+            m.time = op[1]
         elif kind == "terminate":
             m.state = TERMINATED
         elif kind == "reset":
             m.__init__()
+            self._pending = (0.0, None)
         elif kind == "step":
             if status == DISCARD:
                 m.state = STEP_FAILED
@@ -276,11 +361,20 @@ class Child:
     def _setup(self, op, legal):
         start, stop = op[1], op[2]
         ok = math.isfinite(start) and (stop is None or stop >= start)
+        if self.fmu.fmi == 3:  # the times go with fmi3EnterInitializationMode
+            if self.model.state == INSTANTIATED:
+                self._pending = (start, stop)
+            return None, None
         return self.calls.SetupExperiment(self.component, 0, 0.0, start, int(stop is not None),
                                           0.0 if stop is None else stop), ok
 
     def _enter(self, op, legal):
-        return self.calls.EnterInitializationMode(self.component), None
+        if self.fmu.fmi == 2:
+            return self.calls.EnterInitializationMode(self.component), None
+        start, stop = self._pending
+        ok = math.isfinite(start) and (stop is None or stop >= start)
+        return self.calls.EnterInitializationMode(self.component, False, 0.0, start, stop is not None,
+                                                  0.0 if stop is None else stop), ok
 
     def _exit(self, op, legal):
         return self.calls.ExitInitializationMode(self.component), None
@@ -295,7 +389,7 @@ class Child:
         names = op[1]
         vr = (ctypes.c_uint * len(names))(*self._vr(names))
         out = (ctypes.c_double * len(names))()
-        status = self.calls.GetReal(self.component, vr, len(names), out)
+        status = self.calls.GetReal(self.component, vr, len(names), out, *self._n(len(names)))
         self._last_values = dict(zip(names, out))
         return status, all(isinstance(n, str) for n in names)
 
@@ -303,7 +397,7 @@ class Child:
         name, value = op[1], op[2]
         var = next((v for v in self.fmu.variables if v.name == name), None)
         vr = (ctypes.c_uint * 1)(var.vr if var else int(name))
-        status = self.calls.SetReal(self.component, vr, 1, (ctypes.c_double * 1)(value))
+        status = self.calls.SetReal(self.component, vr, 1, (ctypes.c_double * 1)(value), *self._n(1))
         ok = (var is not None and var.causality in ("input", "parameter") and math.isfinite(value)
               and var.min <= value <= var.max
               and (var.causality == "input" or self.model.state in (INSTANTIATED, INIT)))
@@ -311,7 +405,11 @@ class Child:
 
     def _step(self, op, legal):
         t, h = op[1], op[2]
-        status = self.calls.DoStep(self.component, t, h, 1)
+        if self.fmu.fmi == 3:
+            flags, last = [ctypes.c_bool() for _ in range(3)], ctypes.c_double()
+            status = self.calls.DoStep(self.component, t, h, True, *map(ctypes.byref, flags), ctypes.byref(last))
+        else:
+            status = self.calls.DoStep(self.component, t, h, 1)
         m = self.model
         if not (math.isfinite(t) and math.isfinite(h)) or h < 0:
             return status, False
@@ -324,13 +422,77 @@ class Child:
             return status, False
         return status, True
 
+    def _n(self, n):
+        """FMI 3.0's get and set take the number of values too."""
+        return (n,) if self.fmu.fmi == 3 else ()
+
     def _status(self, op, legal):
+        if self.fmu.fmi == 3:
+            return self.calls.EnterConfigurationMode(self.component), None
         which = op[1]
         if which == "real":
             return self.calls.GetRealStatus(self.component, 2, ctypes.byref(ctypes.c_double())), None
         if which == "boolean":
             return self.calls.GetBooleanStatus(self.component, 3, ctypes.byref(ctypes.c_int())), None
         return self.calls.GetStatus(self.component, 0, ctypes.byref(ctypes.c_int())), None
+
+    # -- Model Exchange -------------------------------------------------------------------
+    def _enterct(self, op, legal):
+        return self.calls.EnterContinuousTimeMode(self.component), None
+
+    def _enterevent(self, op, legal):
+        return self.calls.EnterEventMode(self.component), None
+
+    def _update(self, op, legal):
+        if self.fmu.fmi == 2:
+            return self.calls.NewDiscreteStates(self.component, ctypes.create_string_buffer(64)), None
+        flags, next_time = [ctypes.c_bool() for _ in range(5)], ctypes.c_double()
+        return self.calls.UpdateDiscreteStates(self.component, *map(ctypes.byref, flags),
+                                               ctypes.byref(next_time)), None
+
+    def _completed(self, op, legal):
+        flag = ctypes.c_bool if self.fmu.fmi == 3 else ctypes.c_int
+        a, b = flag(), flag()
+        return self.calls.CompletedIntegratorStep(self.component, 1, ctypes.byref(a), ctypes.byref(b)), None
+
+    def _settime(self, op, legal):
+        t = op[1]
+        return self.calls.SetTime(self.component, t), math.isfinite(t) and t >= self.model.start
+
+    def _setx(self, op, legal):
+        """["setx", factor, index, value, size change]: the states last read times (1 + factor),
+        with VALUE at INDEX (none: None), as n + SIZE CHANGE values."""
+        factor, index, bad, delta = op[1], op[2], op[3], op[4]
+        n = self.fmu.n_states
+        values = [x * (1.0 + factor) for x in (self._x or [0.0] * n)]
+        if index is not None and n:
+            values[index % n] = bad
+        count = max(0, n + delta)
+        array = (ctypes.c_double * max(count, 1))(*(values + [0.0] * count)[:max(count, 1)])
+        status = self.calls.SetContinuousStates(self.component, array, count)
+        return status, delta == 0 and all(math.isfinite(v) for v in values)
+
+    def _vector(self, op, function, n):
+        count = max(0, n + op[1])
+        array = (ctypes.c_double * max(count, 1))()
+        status = getattr(self.calls, function)(self.component, array, count)
+        values = list(array)[:count]
+        self._last_values = {f"{function}[{k}]": v for k, v in enumerate(values)}
+        return status, values, op[1] == 0
+
+    def _getx(self, op, legal):
+        status, values, ok = self._vector(op, "GetContinuousStates", self.fmu.n_states)
+        if status == OK and ok:
+            self._x = values
+        return status, ok
+
+    def _getdx(self, op, legal):
+        status, _, ok = self._vector(op, "GetDerivatives", self.fmu.n_states)
+        return status, ok
+
+    def _getz(self, op, legal):
+        status, _, ok = self._vector(op, "GetEventIndicators", self.fmu.n_indicators)
+        return status, ok
 
     def _snapshot(self) -> Snapshot:
         m = self.model
@@ -471,10 +633,12 @@ def generate(fmu: LoadedFmu, seed: int, length: int = 40) -> list[list]:
             return ["enter"]
         if phase == INIT:
             if rng.random() < 0.4:
-                phase = STEP_COMPLETE
+                phase = EVENT if fmu.model_exchange else STEP_COMPLETE
                 return ["exit"]
             var = rng.choice(fmu.settable)
             return ["set", var.name, value(var)]
+        if phase in (EVENT, CT):
+            return model_exchange_next()
         r = rng.random()
         if r < 0.5:
             h = rng.choice(LEGAL_STEPS) if rng.random() < 0.7 else rng.uniform(1e-6, 0.3)
@@ -492,9 +656,64 @@ def generate(fmu: LoadedFmu, seed: int, length: int = 40) -> list[list]:
         return ["getstate", rng.randrange(3)] if rng.random() < 0.6 else ["serialize", rng.randrange(3),
                                                                          rng.randrange(3)]
 
+    def model_exchange_next() -> list:
+        """A legal Model Exchange call in event or continuous-time mode."""
+        nonlocal t, phase
+        r = rng.random()
+        if phase == EVENT:
+            if r < 0.3:
+                return ["update"]
+            if r < 0.65:
+                phase = CT
+                return ["enterct"]
+            if r < 0.8:
+                return ["get", [v.name for v in fmu.outputs]]
+            return ["set", (var := rng.choice(inputs)).name, value(var)]
+        if r < 0.25:
+            t += rng.choice(LEGAL_STEPS) * rng.choice([1e-3, 0.1, 1.0])
+            return ["settime", t]
+        if r < 0.4:
+            return ["getx", 0]
+        if r < 0.55:
+            return ["setx", rng.choice([0.0, 1e-9, 1e-6, -1e-6]), None, 0.0, 0]
+        if r < 0.65:
+            return ["getdx", 0]
+        if r < 0.7:
+            return ["getz", 0]
+        if r < 0.75:
+            return ["completed"]
+        if r < 0.8:
+            phase = EVENT
+            return ["enterevent"]
+        if r < 0.88:
+            return ["get", [v.name for v in fmu.outputs]]
+        if r < 0.94:
+            return ["set", (var := rng.choice(inputs)).name, value(var)]
+        return ["getstate", rng.randrange(3)] if rng.random() < 0.6 else ["serialize", rng.randrange(3),
+                                                                         rng.randrange(3)]
+
+    def model_exchange_deviation() -> list:
+        """A Model Exchange call with a bad argument, or in any state (illegal in Co-Simulation)."""
+        r = rng.random()
+        if r < 0.25:
+            return ["settime", rng.choice([math.nan, math.inf, -1.0, -1e-9, t, t + 1e3, 1e300])]
+        if r < 0.5:
+            return ["setx", rng.choice([0.0, 1e3, -2.0, 1e300]), rng.choice([None, rng.randrange(7)]),
+                    rng.choice([*BAD_NUMBERS, 1e300, -1e300, 0.0]), rng.choice([0, 0, 0, -1, 1, -7])]
+        if r < 0.75:
+            return [rng.choice(["getx", "getdx", "getz"]), rng.choice([0, -1, 1, -100])]
+        return [rng.choice(["enterct", "enterevent", "update", "completed"])]
+
+    inputs = [v for v in fmu.settable if v.causality == "input"] or fmu.settable
     for _ in range(length):
         if rng.random() < 0.8:
             ops.append(legal_next())
+            continue
+        if rng.random() < (0.35 if fmu.model_exchange else 0.05):
+            ops.append(model_exchange_deviation())
+            if rng.random() < 0.3:
+                ops.append(["reset"])
+                t, stop, phase = 0.0, None, INSTANTIATED
             continue
         r = rng.random()
         if r < 0.05:
@@ -537,7 +756,7 @@ def generate(fmu: LoadedFmu, seed: int, length: int = 40) -> list[list]:
             elif q < 0.87:
                 corruption = ["value", rng.randrange(64), rng.choice([0.0, -1.0, 1e300, -1e300, 1e-320, 7.0])]
             else:
-                corruption = ["foreign", rng.choice([n for n in FMU_NAMES if n != fmu.name])]
+                corruption = ["foreign", rng.choice(fmu.foreign_names or [n for n in FMU_NAMES if n != fmu.name])]
             ops.append(["deserialize", rng.randrange(3), corruption, rng.randrange(3)])
             if rng.random() < 0.7:
                 ops.append(["setstate", ops[-1][3]])
@@ -665,8 +884,8 @@ def sample_state(fmu: LoadedFmu) -> bytes:
         try:
             child = Child(fmu, {}, None)
             child.instantiate()
-            for op in (["setup", 0.0, None], ["enter"], ["exit"], ["step", 0.0, 1e-3], ["getstate", 0],
-                       ["serialize", 0, 0]):
+            run = ["enterct"] if fmu.model_exchange else ["step", 0.0, 1e-3]
+            for op in (["setup", 0.0, None], ["enter"], ["exit"], run, ["getstate", 0], ["serialize", 0, 0]):
                 child.run(op)
             os.write(write_fd, child.blobs[0][0])
         finally:
@@ -685,7 +904,12 @@ class Campaign:
 
     @classmethod
     def load(cls, paths, workdir) -> "Campaign":
-        fmus = {Path(p).stem: LoadedFmu(Path(p), Path(workdir)) for p in paths}
+        """PATHS: FMU files, or (file, True) to fuzz the FMU's Model Exchange interface."""
+        entries = [p if isinstance(p, tuple) else (p, False) for p in paths]
+        loaded = [LoadedFmu(Path(p), Path(workdir), me) for p, me in entries]
+        fmus = {f.name: f for f in loaded}
+        for f in loaded:
+            f.foreign_names = [n for n in fmus if n != f.name]
         return cls(fmus, {name: sample_state(f) for name, f in fmus.items()})
 
     def run(self, name: str, seeds, timeout: float = 3.0, length: int = 40) -> list[Outcome]:

@@ -1,4 +1,5 @@
-"""A fixed-seed FMI call-sequence fuzz run over the three FMUs (the long run
+"""A fixed-seed FMI call-sequence fuzz run over the three FMUs, as FMI 2.0 and
+FMI 3.0 Co-Simulation and (the joint) Model Exchange of both versions (the long run
 is benchmarks/fuzz_fmus.py; the engine and its classes of finding are in
 fmi_fuzzer.py). One run is shared by the tests below, each of which asserts
 one class of finding is absent."""
@@ -12,22 +13,28 @@ import time
 
 import pytest
 
-from fmi_fuzzer import FMU_NAMES, Campaign, summarise
+from fmi_fuzzer import FMU_NAMES, ME_CALLS, Campaign, summarise
 from hdjoint.fmu.shipped import fmu_path
+
+# Every FMU of both versions, and the joint's Model Exchange interface of both.
+TARGETS = ([fmu_path(n, fmi) for fmi in (2, 3) for n in FMU_NAMES]
+           + [(fmu_path("HarmonicDriveJoint", fmi), True) for fmi in (2, 3)])
+ME_TARGETS = ("HarmonicDriveJoint_me", "HarmonicDriveJoint_fmi3_me")
 
 SEQUENCES_PER_FMU = 80
 TIMEOUT = 1.5  # s of CPU time: a normal sequence takes ~50 ms
-pytestmark = pytest.mark.slow  # one shared fuzz run: ~20 s
+pytestmark = pytest.mark.slow  # one shared fuzz run: ~30 s
 
 
 @pytest.fixture(scope="module")
 def campaign(tmp_path_factory):
-    return Campaign.load([fmu_path(n) for n in FMU_NAMES], tmp_path_factory.mktemp("fuzz"))
+    return Campaign.load(TARGETS, tmp_path_factory.mktemp("fuzz"))
 
 
 @pytest.fixture(scope="module")
 def outcomes(campaign):
-    return {name: campaign.run(name, range(SEQUENCES_PER_FMU), TIMEOUT) for name in FMU_NAMES}
+    assert len(campaign.fmus) == 8
+    return {name: campaign.run(name, range(SEQUENCES_PER_FMU), TIMEOUT) for name in campaign.fmus}
 
 
 def findings(outcomes, category):
@@ -42,6 +49,7 @@ def test_the_run_covers_every_fmu_with_many_calls(outcomes):
         assert summary["calls"] > 20 * SEQUENCES_PER_FMU, (name, summary)
         kinds = {op[0] for o in runs for op in o.ops}
         assert {"step", "set", "get", "deserialize", "setstate", "reset", "free", "terminate"} <= kinds
+        assert set(ME_CALLS) <= kinds or name not in ME_TARGETS, (name, kinds)
 
 
 def test_no_fmu_crashes(outcomes):
@@ -111,3 +119,27 @@ def test_a_legal_run_has_no_finding(campaign):
     ops += [["step", k * 1e-3, 1e-3] for k in range(20)] + [["get", ["tau_d", "i_m"]], ["terminate"]]
     outcome = campaign.replay("JointController", ops, TIMEOUT)
     assert outcome.findings == [] and outcome.calls == len(ops)
+
+
+LEGAL_ME_RUN = [["instantiate"], ["setup", 0.0, 1.0], ["enter"], ["exit"], ["update"], ["enterct"], ["getx", 0],
+                ["settime", 1e-3], ["setx", 1e-6, None, 0.0, 0], ["getdx", 0], ["getz", 0], ["completed"],
+                ["get", ["tau_joint", "theta_m"]], ["enterevent"], ["update"], ["enterct"], ["terminate"]]
+
+
+@pytest.mark.parametrize("name", ME_TARGETS)
+def test_a_legal_model_exchange_run_has_no_finding(campaign, name):
+    outcome = campaign.replay(name, LEGAL_ME_RUN, TIMEOUT)
+    assert outcome.findings == [] and outcome.calls == len(LEGAL_ME_RUN)
+
+
+def test_an_accepted_illegal_model_exchange_call_is_found(campaign):
+    # The harness's table decides legality: with getdx declared illegal, the
+    # FMU's (correct) acceptance of it must show as a finding.
+    fmu = campaign.fmus["HarmonicDriveJoint_fmi3_me"]
+    table = fmu.allowed
+    fmu.allowed = {**table, "getdx": set()}
+    try:
+        outcome = campaign.replay(fmu.name, LEGAL_ME_RUN, TIMEOUT)
+    finally:
+        fmu.allowed = table
+    assert [(f[0], LEGAL_ME_RUN[f[1]][0]) for f in outcome.findings] == [("illegal call accepted", "getdx")]

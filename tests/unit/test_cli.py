@@ -30,14 +30,23 @@ ESTIMATE_COLUMNS = ["time", *ESTIMATOR_OUTPUTS]
 
 
 def test_fmus_writes_every_fmu(tmp_path, capsys):
+    """Both FMI versions by default: NAME.fmu (FMI 2.0) and NAME_fmi3.fmu (FMI 3.0)."""
     out = tmp_path / "new" / "dir"
     code, stdout, err = run_cli(capsys, "fmus", "--out", out)
     assert code == 0, err
-    assert files_in(out) == sorted(f"{n}.fmu" for n in FMU_NAMES)
+    assert files_in(out) == sorted([f"{n}.fmu" for n in FMU_NAMES] + [f"{n}_fmi3.fmu" for n in FMU_NAMES])
     for name in FMU_NAMES:
-        written = out / f"{name}.fmu"
-        assert hashlib.sha256(written.read_bytes()).digest() == hashlib.sha256(fmu_path(name).read_bytes()).digest()
-        assert str(written) in stdout
+        for fmi, written in ((2, out / f"{name}.fmu"), (3, out / f"{name}_fmi3.fmu")):
+            shipped = fmu_path(name, fmi).read_bytes()
+            assert hashlib.sha256(written.read_bytes()).digest() == hashlib.sha256(shipped).digest()
+            assert str(written) in stdout
+
+
+@pytest.mark.parametrize("fmi, suffix", [("2", ".fmu"), ("3", "_fmi3.fmu")])
+def test_fmus_writes_one_fmi_version(tmp_path, capsys, fmi, suffix):
+    code, _, err = run_cli(capsys, "fmus", "--out", tmp_path, "--fmi", fmi)
+    assert code == 0, err
+    assert files_in(tmp_path) == sorted(f"{n}{suffix}" for n in FMU_NAMES)
 
 
 def test_fmus_into_a_file_fails_cleanly(tmp_path, capsys):

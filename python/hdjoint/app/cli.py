@@ -13,8 +13,9 @@ from hdjoint.io.timebase import TIME_UNITS
 
 
 def cmd_fmus(args) -> int:
-    from hdjoint.fmu.shipped import export_fmus
-    for path in export_fmus(args.out):
+    from hdjoint.fmu.shipped import FMI_VERSIONS, export_fmus
+    versions = FMI_VERSIONS if args.fmi == "both" else (int(args.fmi),)
+    for path in export_fmus(args.out, versions):
         print(path)
     return 0
 
@@ -86,6 +87,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("fmus", help="write every FMU the project builds into a directory")
     p.add_argument("--out", required=True, help="target directory")
+    p.add_argument("--fmi", choices=("2", "3", "both"), default="both",
+                   help="FMI version: 2 (NAME.fmu), 3 (NAME_fmi3.fmu) or both (default)")
     p.set_defaults(run=cmd_fmus)
 
     p = sub.add_parser("simulate", help="run the joint FMU on a built-in experiment, write a recording")

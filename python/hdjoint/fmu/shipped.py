@@ -1,10 +1,12 @@
-"""The FMUs this package ships (built by CMake into the wheel)."""
+"""The FMUs this package ships (built by CMake into the wheel): each model as
+FMI 2.0 (`<name>.fmu`) and as FMI 3.0 (`<name>_fmi3.fmu`), from the same C++."""
 from __future__ import annotations
 
 import shutil
 from pathlib import Path
 
 FMU_NAMES = ("JointTorqueEstimator", "HarmonicDriveJoint", "JointController")
+FMI_VERSIONS = (2, 3)
 _FMU_DIR = Path(__file__).parents[1] / "fmus"  # installed at the package's top by CMake
 
 
@@ -19,18 +21,27 @@ def shipped_file(folder: Path, name: str, known, suffix: str, what: str) -> Path
     return path
 
 
-def fmu_path(name: str) -> Path:
-    """Path of a shipped FMU, by model identifier."""
-    return shipped_file(_FMU_DIR, name, FMU_NAMES, ".fmu", "FMU")
+def fmu_file_name(name: str, fmi: int = 2) -> str:
+    """The file name of a model's FMU for FMI version 2 or 3."""
+    if fmi not in FMI_VERSIONS:
+        raise ValueError(f"unknown FMI version {fmi!r}; known: 2, 3")
+    return f"{name}.fmu" if fmi == 2 else f"{name}_fmi3.fmu"
 
 
-def export_fmus(out_dir: str | Path) -> list[Path]:
-    """Copy every FMU into out_dir; returns the written paths."""
+def fmu_path(name: str, fmi: int = 2) -> Path:
+    """Path of a shipped FMU, by model identifier and FMI version (2 or 3)."""
+    fmu_file_name(name, fmi)  # the version checked first
+    return shipped_file(_FMU_DIR, name, FMU_NAMES, ".fmu" if fmi == 2 else "_fmi3.fmu", "FMU")
+
+
+def export_fmus(out_dir: str | Path, fmi: tuple[int, ...] = FMI_VERSIONS) -> list[Path]:
+    """Copy every FMU of the FMI versions `fmi` into out_dir; returns the written paths."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     written = []
-    for name in FMU_NAMES:
-        target = out / f"{name}.fmu"
-        shutil.copyfile(fmu_path(name), target)
-        written.append(target)
+    for version in fmi:
+        for name in FMU_NAMES:
+            target = out / fmu_file_name(name, version)
+            shutil.copyfile(fmu_path(name, version), target)
+            written.append(target)
     return written
