@@ -6,10 +6,16 @@ Heavy modules are imported inside the subcommands, so `hdjoint --help` is quick.
 from __future__ import annotations
 
 import argparse
+import math
+import signal
 import sys
 
-from hdjoint.jobs.inputs import UserError, check_output_file, read_params as _params
+from hdjoint.io.outputs import OutputError
+from hdjoint.jobs.inputs import UserError, check_output_file, locked_output, read_params as _params
 from hdjoint.io.timebase import TIME_UNITS
+
+# The shortest recording simulate writes: ten samples at 1 kHz (the readers need two rows, a fit more).
+MIN_DURATION = 0.01
 
 
 def cmd_fmus(args) -> int:
@@ -19,15 +25,27 @@ def cmd_fmus(args) -> int:
     return 0
 
 
+def _check_simulate(args, experiments) -> None:
+    if args.experiment not in experiments.EXPERIMENTS:
+        raise UserError(f"--experiment {args.experiment}: unknown; known: {', '.join(experiments.EXPERIMENTS)}")
+    if args.duration is not None:
+        longest = experiments.EXPERIMENTS[args.experiment].duration
+        if not math.isfinite(args.duration) or not MIN_DURATION <= args.duration <= longest:
+            raise UserError(f"--duration {args.duration:g}: must be from {MIN_DURATION:g} s to the experiment's "
+                            f"length, {longest:g} s ({args.experiment}); leave it out for the whole experiment")
+
+
 def cmd_simulate(args) -> int:
     from hdjoint.fmu import experiments
     from hdjoint.io.recording import write_recording
+    _check_simulate(args, experiments)
     check_output_file(args.output, inputs=(args.params, args.joint))  # before any work
     nominal = _params(args.params)
     joint = _params(args.joint) if args.joint else experiments.true_joint_parameters(nominal)
-    rec = experiments.run(args.experiment, joint=joint, nominal=nominal, duration=args.duration,
-                          sensors=experiments.Sensors(seed=args.seed))
-    write_recording(args.output, rec)
+    with locked_output(args.output):
+        rec = experiments.run(args.experiment, joint=joint, nominal=nominal, duration=args.duration,
+                              sensors=experiments.Sensors(seed=args.seed))
+        write_recording(args.output, rec)
     print(f"{args.output}: {len(rec)} samples, {rec.duration:.3f} s ({args.experiment})")
     return 0
 
@@ -74,6 +92,16 @@ def _time_unit_argument(p) -> None:
                    help="unit of the recording's time column (default: seconds, refused when implausible)")
 
 
+def _seed(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be 0 or more, not {value}")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="hdjoint", description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="command", required=True)
@@ -83,12 +111,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(run=cmd_fmus)
 
     p = sub.add_parser("simulate", help="run the joint FMU on a built-in experiment, write a recording")
-    p.add_argument("--experiment", default="paper", help="built-in experiment (default: paper)")
+    p.add_argument("--experiment", default="paper",
+                   help="built-in experiment: paper, paper_repeated, multisine, sweep or chirp (default: paper)")
     p.add_argument("--params", help="nominal parameter set (JSON) the controller assumes")
     p.add_argument("--joint", help="parameter set (JSON) of the simulated joint "
                                    "(default: the nominal set with realistic deviations)")
-    p.add_argument("--duration", type=float, help="seconds (default: the experiment's)")
-    p.add_argument("--seed", type=int, default=1, help="seed of the sensor noise")
+    p.add_argument("--duration", type=float,
+                   help=f"seconds, from {MIN_DURATION:g} to the experiment's length (default: the whole experiment)")
+    p.add_argument("--seed", type=_seed, default=1, help="seed of the sensor noise (an integer >= 0; default 1)")
     p.add_argument("-o", "--output", required=True, help="recording to write (CSV)")
     p.set_defaults(run=cmd_simulate)
 
@@ -129,19 +159,41 @@ def build_parser() -> argparse.ArgumentParser:
     return ap
 
 
+class Terminated(BaseException):
+    """SIGTERM, raised like a KeyboardInterrupt so every temporary file is removed on the way out."""
+
+
+def _terminate(signum, frame):
+    raise Terminated()
+
+
 def main(argv=None) -> int:
     try:
         args = build_parser().parse_args(argv)
     except SystemExit as e:  # argparse: --help (0) or a usage error (2), already printed
         return e.code
+    previous = None
+    try:
+        previous = signal.signal(signal.SIGTERM, _terminate)
+    except ValueError:  # not the main thread: the host handles its signals
+        pass
     try:
         return args.run(args)
-    except UserError as e:
+    except (UserError, OutputError) as e:
         print(f"hdjoint {args.command}: {e}", file=sys.stderr)
         return 2
     except (OSError, RuntimeError, ValueError) as e:
         print(f"hdjoint {args.command}: {e}", file=sys.stderr)
         return 1
+    except KeyboardInterrupt:  # one line, no traceback; the jobs' cleanups have run
+        print(f"hdjoint {args.command}: interrupted (SIGINT); no output was left half-written", file=sys.stderr)
+        return 128 + signal.SIGINT
+    except Terminated:
+        print(f"hdjoint {args.command}: terminated (SIGTERM); no output was left half-written", file=sys.stderr)
+        return 128 + signal.SIGTERM
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":

@@ -29,7 +29,7 @@ def given_ts(params_path) -> float | None:
     """The sample period the parameter file sets, or None when it leaves Ts open."""
     if not params_path:
         return None
-    given = json.loads(Path(params_path).read_text())  # read_params has validated it
+    given = json.loads(Path(params_path).read_bytes().decode("utf-8-sig"))  # read_params has validated it
     return float(given["Ts"]) if "Ts" in given else None
 
 

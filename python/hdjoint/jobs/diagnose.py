@@ -2,11 +2,12 @@
 findings.json, params.json, params.ssv and report.html out, all or nothing."""
 from __future__ import annotations
 
-import os
 import sys
 from pathlib import Path
 
-from hdjoint.jobs.inputs import UserError, check_output_directory, read_params, read_recording
+from hdjoint.io.outputs import (OutputError, check_replaceable, created_directory, replace_into, sweep_debris,
+    temp_path, write_error)
+from hdjoint.jobs.inputs import UserError, check_output_directory, locked_output, read_params, read_recording
 
 
 def _progress(message: str) -> None:
@@ -22,15 +23,18 @@ def diagnose_to_directory(recording, params, out, validate=(), time_unit: str | 
     "tolerance" object overrides the calibration priors) and write findings.json, params.json, params.ssv and
     report.html into OUT. Returns the findings document. Raises UserError
     for bad input; nothing is written unless everything was computed."""
-    import json
-    import tempfile
+    paths = [recording] if isinstance(recording, (str, Path)) else list(recording)
+    check_output_directory(out, DIAGNOSIS_FILES, inputs=(*paths, params, *validate))  # before any work
+    with locked_output(out):
+        return _diagnose_locked(paths, params, out, validate, time_unit)
+
+
+def _diagnose_locked(paths, params, out, validate, time_unit) -> dict:
     from hdjoint.io import parameters
     from hdjoint.diagnosis import report
     from hdjoint.diagnosis.prepare import DiagnosisError
     from hdjoint.diagnosis.pipeline import diagnose
     from hdjoint.diagnosis.validation import validate as validate_on
-    paths = [recording] if isinstance(recording, (str, Path)) else list(recording)
-    check_output_directory(out, DIAGNOSIS_FILES, inputs=(*paths, params, *validate))  # before any work
     recs = [read_recording(path, time_unit) for path in paths]
     others = [read_recording(path, time_unit) for path in validate]  # read first: a bad file stops before any work
     nominal = read_params(params)
@@ -47,16 +51,50 @@ def diagnose_to_directory(recording, params, out, validate=(), time_unit: str | 
     except DiagnosisError as e:
         raise UserError(str(e)) from None
     page = report.build(result, doc)
-    # Everything is computed; stage the files, then move them in, so a
-    # failure never leaves a half-written OUT.
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(dir=out) as tmp:
-        stage = Path(tmp)
-        (stage / "findings.json").write_text(json.dumps(doc, indent=2, default=float) + "\n")
-        parameters.save(stage / "params.json", doc["params"])
-        parameters.save_ssv(stage / "params.ssv", doc["params"], name="hdjoint corrected")
-        (stage / "report.html").write_text(page)
-        for name in DIAGNOSIS_FILES:
-            os.replace(stage / name, out / name)  # never into a directory of that name
+    write_diagnosis(out, doc, page)
     return doc
+
+
+def write_diagnosis(out, doc: dict, page: str) -> None:
+    """Stage the four files in a folder inside OUT, then move them in, so a
+    failure (a full disk) never leaves a half-written OUT, nor an OUT this
+    run created; a run killed outright leaves its staging folder, which the
+    next run removes."""
+    import json
+    import shutil
+    from hdjoint.io import parameters
+    out = Path(out)
+    created = created_directory(out)
+    stage = None
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        sweep_debris(out / "stage")
+        stage = Path(temp_path(out / "stage"))
+        stage.mkdir()
+        for name, write in (("findings.json", lambda p: p.write_text(json.dumps(doc, indent=2, default=float) + "\n")),
+                            ("params.json", lambda p: parameters.save(p, doc["params"])),
+                            ("params.ssv", lambda p: parameters.save_ssv(p, doc["params"], name="hdjoint corrected")),
+                            ("report.html", lambda p: p.write_text(page))):
+            try:
+                write(stage / name)
+            except OSError as e:
+                raise write_error(out / name, e) from None
+            except OutputError as e:  # from parameters.save: it names the staged file
+                raise OutputError(str(e).replace(str(stage / name), str(out / name))) from None
+        for name in DIAGNOSIS_FILES:
+            check_replaceable(out / name)  # again: it may have changed while we computed
+        for name in DIAGNOSIS_FILES:
+            replace_into(stage / name, out / name)  # never into a directory of that name; modes kept
+    except OutputError as e:
+        raise UserError(str(e)) from None
+    except OSError as e:
+        raise UserError(str(write_error(out, e))) from None
+    finally:
+        if stage is not None:
+            shutil.rmtree(stage, ignore_errors=True)
+        if created and created[0].exists() and not any(created[-1].iterdir()):
+            for folder in reversed(created):
+                try:
+                    folder.rmdir()
+                except OSError:
+                    break

@@ -13,7 +13,7 @@ import numpy as np
 
 from hdjoint.estimation.engines import BothEngines, CoreEngine, FmuEngine, RowFeeder
 from hdjoint.estimation.smoother import SMOOTH_COLUMNS, SmoothedRows
-from hdjoint.jobs.inputs import UserError, check_output_file, read_params
+from hdjoint.jobs.inputs import UserError, check_output_file, locked_output, read_params
 from hdjoint.estimation.metrics import RunningErrorFigures
 from hdjoint.io.recording import CHUNK_ROWS, CsvWriter, Recording, RecordingError, iter_recording
 from hdjoint.io.timebase import (TIME_UNITS, TimeBaseError, check_step, describe, given_ts, irregular_steps,
@@ -114,6 +114,12 @@ def estimate_to_file(opts: Options) -> dict:
     {estimate name: ErrorFigures against tau_sensor} (empty without a sensor)."""
     from hdjoint.io import parameters
     check_output_file(opts.output, inputs=(opts.recording, opts.params))  # before any work
+    with locked_output(opts.output):
+        return _estimate_locked(opts)
+
+
+def _estimate_locked(opts: Options) -> dict:
+    from hdjoint.io import parameters
     params = read_params(opts.params)
     blocks = TimedBlocks(opts, given_ts(opts.params))
     ts_from_recording = given_ts(opts.params) is None
