@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import signal
 import sys
 
@@ -163,7 +164,14 @@ class Terminated(BaseException):
     """SIGTERM, raised like a KeyboardInterrupt so every temporary file is removed on the way out."""
 
 
+_MAIN_PID = None  # the process that installed the handler; a forked worker dies of SIGTERM as usual
+
+
 def _terminate(signum, frame):
+    if os.getpid() != _MAIN_PID:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        os.kill(os.getpid(), signal.SIGTERM)
+        return
     raise Terminated()
 
 
@@ -172,8 +180,10 @@ def main(argv=None) -> int:
         args = build_parser().parse_args(argv)
     except SystemExit as e:  # argparse: --help (0) or a usage error (2), already printed
         return e.code
+    global _MAIN_PID
     previous = None
     try:
+        _MAIN_PID = os.getpid()
         previous = signal.signal(signal.SIGTERM, _terminate)
     except ValueError:  # not the main thread: the host handles its signals
         pass

@@ -73,8 +73,13 @@ class FmuInstance:
         # Only what running needs: the FMU also carries its sources (with Eigen).
         # Into a folder named with the pid: a run killed outright leaves it, and the next run removes it.
         sweep_temp_dirs("hdjoint-fmu")
-        self._unzipdir = extract(str(self.path), unzipdir=tempfile.mkdtemp(prefix=f"hdjoint-fmu-{os.getpid()}-"),
-                                 include=lambda name: not name.startswith("sources/"))
+        unzipdir = tempfile.mkdtemp(prefix=f"hdjoint-fmu-{os.getpid()}-")
+        try:
+            self._unzipdir = extract(str(self.path), unzipdir=unzipdir,
+                                     include=lambda name: not name.startswith("sources/"))
+        except OSError as e:  # a full temporary folder
+            shutil.rmtree(unzipdir, ignore_errors=True)
+            raise OSError(e.errno, f"cannot unpack {self.path.name} into {unzipdir} (TMPDIR): {e.strerror}") from None
         self.messages: list[tuple[str, str]] = []  # (status, message)
         self._environment = next(_ENVIRONMENTS)
         _MESSAGES[self._environment] = self.messages

@@ -481,7 +481,10 @@ class CsvWriter:
             raise
 
     def discard(self) -> None:
-        self._file.close()
+        try:
+            self._file.close()  # flushes: on a full disk this fails too, and the file goes all the same
+        except OSError:
+            pass
         try:
             os.unlink(self._tmp)
         except FileNotFoundError:

@@ -1,0 +1,142 @@
+"""Bad input an adversarial user tries (issue 37, items 7 and 8): each gets
+exit 2 and one line naming the file or the option, before any work, and
+nothing is written."""
+from __future__ import annotations
+
+import json
+import resource
+import signal
+import subprocess
+import sys
+
+import pytest
+
+from hdjoint.io.recording import read_recording, write_recording
+
+from cli_helpers import assert_one_line_error, files_in, rec_csv, run_cli, simulated  # noqa: F401 (fixtures)
+
+CLI = [sys.executable, "-m", "hdjoint.app.cli"]
+
+
+# ---------------------------------------------------------------- simulate
+
+
+@pytest.mark.parametrize("argv, fragment", [
+    (["--experiment", "bogus"], "--experiment bogus"),
+    (["--duration", "inf"], "--duration inf"),
+    (["--duration", "nan"], "--duration nan"),
+    (["--duration", "-1"], "--duration -1"),
+    (["--duration", "0"], "--duration 0"),        # was: the whole 58 s
+    (["--duration", "1e-9"], "--duration 1e-09"),  # was: a one-row file the readers refuse
+    (["--duration", "1e9"], "--duration 1e+09"),
+    (["--duration", "5000"], "--duration 5000"),  # past the experiment's end: it ran away
+])
+def test_simulate_refuses_a_bad_experiment_or_duration(tmp_path, capsys, argv, fragment):
+    out = tmp_path / "rec.csv"
+    code, _, err = run_cli(capsys, "simulate", *argv, "-o", out)
+    assert code == 2
+    assert_one_line_error(err, fragment)
+    assert files_in(tmp_path) == []
+
+
+def test_simulate_refuses_a_negative_seed(tmp_path, capsys):
+    code, _, err = run_cli(capsys, "simulate", "--duration", "0.1", "--seed", "-1", "-o", tmp_path / "r.csv")
+    assert code == 2 and "--seed" in err and "Traceback" not in err
+    assert files_in(tmp_path) == []
+
+
+def test_simulate_the_shortest_duration_gives_a_readable_recording(tmp_path, capsys):
+    out = tmp_path / "rec.csv"
+    code, _, _ = run_cli(capsys, "simulate", "--duration", "0.01", "-o", out)
+    assert code == 0 and len(read_recording(out)) == 11
+
+
+# ---------------------------------------------------------------- parameter files
+
+
+BAD_FILES = [
+    ("nested", ('{"Kf": ' + "[" * 100_000 + "]" * 100_000 + "}").encode(), ["nested"]),
+    ("not-utf8", b'{"Kf": 9000, "note": "\xff\xfe"}', ["UTF-8"]),
+    ("5000-digits", ('{"Kf": ' + "9" * 5000 + "}").encode(), ["number"]),
+    ("1000-digits", ('{"Kf": ' + "9" * 1000 + "}").encode(), ["'Kf'", "too large"]),
+    ("duplicate-key", b'{"Kf": 9000, "Kf": 12000}', ["'Kf' is given twice"]),
+]
+
+
+@pytest.mark.parametrize("data, fragments", [b[1:] for b in BAD_FILES], ids=[b[0] for b in BAD_FILES])
+def test_a_bad_parameter_file_is_refused_in_one_line(rec_csv, tmp_path, capsys, data, fragments):
+    params = tmp_path / "params.json"
+    params.write_bytes(data)
+    code, _, err = run_cli(capsys, "estimate", rec_csv, "--params", params, "-o", tmp_path / "est.csv")
+    assert code == 2
+    assert_one_line_error(err, str(params), *fragments)
+    assert not (tmp_path / "est.csv").exists()
+
+
+def test_a_byte_order_mark_is_accepted_in_a_parameter_file_as_in_a_recording(rec_csv, tmp_path, capsys):
+    params = tmp_path / "params.json"
+    params.write_bytes(b"\xef\xbb\xbf" + json.dumps({"Ts": 0.001}).encode())
+    code, _, err = run_cli(capsys, "estimate", rec_csv, "--params", params, "-o", tmp_path / "est.csv")
+    assert code == 0, err
+
+
+@pytest.mark.parametrize("tolerance", [1e308, 1e-300, 0, -0.1, "NaN"])
+def test_an_unusable_tolerance_is_refused_before_any_work(rec_csv, tmp_path, capsys, tolerance):
+    params = tmp_path / "params.json"
+    params.write_text('{"tolerance": {"Kt": %s}}' % tolerance)
+    code, _, err = run_cli(capsys, "diagnose", rec_csv, "--params", params, "--out", tmp_path / "out")
+    assert code == 2
+    assert_one_line_error(err, str(params), "tolerance of 'Kt'")
+    assert "[diagnose]" not in err and not (tmp_path / "out").exists()
+
+
+# ---------------------------------------------------------------- the time unit
+
+
+def test_a_declared_unit_that_makes_the_time_base_implausible_is_refused(rec_csv, tmp_path, capsys):
+    out = tmp_path / "est.csv"
+    code, _, err = run_cli(capsys, "estimate", rec_csv, "--time-unit", "ms", "-o", out)
+    assert code == 2  # was: exit 0, tau_hat RMS 1.4e5 N.m and tens of thousands of warnings
+    assert_one_line_error(err, str(rec_csv), "--time-unit ms", "seconds")
+    assert not out.exists()
+
+
+def test_diagnose_refuses_the_same_unit_slip(rec_csv, tmp_path, capsys):
+    code, _, err = run_cli(capsys, "diagnose", rec_csv, "--time-unit", "us", "--out", tmp_path / "out")
+    assert code == 2
+    assert_one_line_error(err, str(rec_csv), "--time-unit us")
+
+
+def test_a_declared_unit_that_fits_is_trusted(rec_csv, tmp_path, capsys):
+    rec = read_recording(rec_csv)
+    rec.time = rec.time * 1e3
+    write_recording(rec_csv, rec)
+    code, _, err = run_cli(capsys, "estimate", rec_csv, "--time-unit", "ms", "-o", tmp_path / "est.csv")
+    assert code == 0, err
+
+
+# ---------------------------------------------------------------- a full disk
+
+
+def _small_file_limit():
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails with EFBIG, like a full disk
+    resource.setrlimit(resource.RLIMIT_FSIZE, (64 * 1024, 64 * 1024))
+
+
+def test_a_disk_that_fills_up_during_diagnose_names_the_file_and_leaves_no_folder(rec_csv, tmp_path):
+    out = tmp_path / "out"
+    run = subprocess.run([*CLI, "diagnose", str(rec_csv), "--out", str(out)], capture_output=True, text=True,
+                         preexec_fn=_small_file_limit)
+    assert run.returncode == 2, run.stderr
+    lines = [line for line in run.stderr.splitlines() if not line.startswith("[diagnose]")]
+    assert len(lines) == 1 and "cannot write" in lines[0] and str(out / "report.html") in lines[0], run.stderr
+    assert files_in(tmp_path) == ["rec.csv"]  # no empty --out, no staging folder, no lock
+
+
+def test_a_disk_that_fills_up_during_estimate_names_the_output(rec_csv, tmp_path):
+    out = tmp_path / "est.csv"
+    run = subprocess.run([*CLI, "estimate", str(rec_csv), "--engine", "batch", "-o", str(out)], capture_output=True,
+                         text=True, preexec_fn=_small_file_limit)
+    assert run.returncode == 2
+    assert_one_line_error(run.stderr, f"cannot write {out}", "nothing was written")
+    assert files_in(tmp_path) == ["rec.csv"]
