@@ -68,6 +68,9 @@ def cmd_diagnose(args) -> int:
     doc = diagnose_to_directory(args.recording, args.params, args.out, args.validate, args.time_unit)
     from hdjoint.diagnosis.validation import summary_line
     print(f"verdict: {doc['verdict']}")
+    for s in doc.get("screening", []):
+        if s["outliers_left_out"]:
+            print(f"  screening: {s['recording']}: {s['summary']}")
     for f in doc["findings"]:
         fit = f["fit"]
         print(f"  {f['effect']:<28} {f['where']['part']:<13} confidence {f['confidence']:.2f}  held-out RMS "

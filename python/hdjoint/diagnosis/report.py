@@ -101,6 +101,10 @@ def _summary(doc: dict) -> str:
     items.append("<p><b>Unexplained:</b> " + (html.escape("; ".join(
         f"{u['channel']} channel against {u['feature']} (held-out gain {u['held_out_gain']:.3g})"
         for u in doc["unexplained"])) if doc["unexplained"] else "nothing") + ".</p>")
+    if any(x["outliers_left_out"] for x in doc.get("screening", [])):  # hdjoint.io.screening
+        items.append("<p><b>Outliers left out:</b> " + html.escape("; ".join(
+            f"{x['recording'] or 'recording'}: {x['summary']}" for x in doc["screening"] if x["outliers_left_out"]))
+            + ".</p>")
     if doc.get("cannot_tell"):
         items.append("<p><b>This recording cannot tell:</b> " + html.escape("; ".join(
             f"{x.get('effect') or x['parameter']}: {x['why']}" for x in doc["cannot_tell"])) + ".</p>")

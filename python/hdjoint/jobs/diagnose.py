@@ -5,6 +5,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from hdjoint.io.outputs import (OutputError, check_replaceable, created_directory, replace_into, sweep_debris,
     temp_path, write_error)
 from hdjoint.jobs.inputs import UserError, check_output_directory, locked_output, read_params, read_recording
@@ -37,6 +39,8 @@ def _diagnose_locked(paths, params, out, validate, time_unit) -> dict:
     from hdjoint.diagnosis.validation import validate as validate_on
     recs = [read_recording(path, time_unit) for path in paths]
     others = [read_recording(path, time_unit) for path in validate]  # read first: a bad file stops before any work
+    recs, screened = _screened(recs)
+    others, screened_others = _screened(others)
     nominal = read_params(params)
     try:
         tolerance = parameters.load_tolerances(params)
@@ -50,9 +54,32 @@ def _diagnose_locked(paths, params, out, validate, time_unit) -> dict:
                                              fitted_on=result.engine.prep) for o in others]
     except DiagnosisError as e:
         raise UserError(str(e)) from None
+    except np.linalg.LinAlgError as e:  # a failure while running, named with the recording
+        raise RuntimeError(f"{', '.join(map(str, paths))}: the diagnosis failed ({e})") from None
+    doc["screening"] = ([dict(s.as_dict(), role="diagnosed") for s in screened]
+                        + [dict(s.as_dict(), role="validation") for s in screened_others])
     page = report.build(result, doc)
     write_diagnosis(out, doc, page)
     return doc
+
+
+def _screened(recs):
+    """Each recording with its outliers left out, and what was found; a
+    degenerate one (a channel that never varies, a wrapping encoder) refused."""
+    from hdjoint.io.screening import Degenerate, check_not_degenerate, screen
+    cleaned, found = [], []
+    for rec in recs:
+        try:
+            check_not_degenerate(rec)  # a wrapping encoder first: its jumps are no outliers
+            rec, screening = screen(rec)
+            check_not_degenerate(rec)  # a channel that only a wild sample made vary
+        except Degenerate as e:
+            raise UserError(str(e)) from None
+        if screening.outliers:
+            _progress(f"{rec.path}: {screening.summary()}")
+        cleaned.append(rec)
+        found.append(screening)
+    return cleaned, found
 
 
 def write_diagnosis(out, doc: dict, page: str) -> None:
@@ -63,6 +90,7 @@ def write_diagnosis(out, doc: dict, page: str) -> None:
     import json
     import shutil
     from hdjoint.io import parameters
+    from hdjoint.io.screening import strict_json
     out = Path(out)
     created = created_directory(out)
     stage = None
@@ -71,7 +99,8 @@ def write_diagnosis(out, doc: dict, page: str) -> None:
         sweep_debris(out / "stage")
         stage = Path(temp_path(out / "stage"))
         stage.mkdir()
-        for name, write in (("findings.json", lambda p: p.write_text(json.dumps(doc, indent=2, default=float) + "\n")),
+        for name, write in (("findings.json", lambda p: p.write_text(json.dumps(strict_json(doc), indent=2, allow_nan=False)
+                                                      + "\n")),
                             ("params.json", lambda p: parameters.save(p, doc["params"])),
                             ("params.ssv", lambda p: parameters.save_ssv(p, doc["params"], name="hdjoint corrected")),
                             ("report.html", lambda p: p.write_text(page))):

@@ -15,6 +15,7 @@ from hdjoint.estimation.engines import BothEngines, CoreEngine, FmuEngine, RowFe
 from hdjoint.estimation.smoother import SMOOTH_COLUMNS, SmoothedRows
 from hdjoint.jobs.inputs import UserError, check_output_file, locked_output, read_params
 from hdjoint.estimation.metrics import RunningErrorFigures
+from hdjoint.io.screening import Degenerate, check_no_wrap
 from hdjoint.io.recording import CHUNK_ROWS, CsvWriter, Recording, RecordingError, iter_recording
 from hdjoint.io.timebase import (TIME_UNITS, TimeBaseError, check_step, describe, given_ts, irregular_steps,
     sample_period)
@@ -58,11 +59,12 @@ class TimedBlocks:
         self.ts = sample_period(self.step, ts_given)
         self._guard(check_step, opts.recording, self.step, opts.time_unit, self.ts)
         self.gaps: list[str] = []
+        self._angles = None  # the last row's angles, for a wrap across blocks
 
     def _guard(self, fn, *args):
         try:
             return fn(*args)
-        except (RecordingError, TimeBaseError) as e:
+        except (RecordingError, TimeBaseError, Degenerate) as e:
             raise UserError(str(e)) from None
 
     def _read(self):
@@ -93,6 +95,8 @@ class TimedBlocks:
                     hint = "--split-gaps" if bad.kind == "gap" else "--allow-jitter"
                     raise UserError(f"{self.opts.recording}: {text}; the estimator assumes a fixed sample period "
                                     f"(pass {hint} to accept it, see docs/robustness.md)")
+            self._guard(check_no_wrap, rec, chunk.lines, self._angles)
+            self._angles = {"theta_m": float(rec.theta_m[-1]), "theta_l": float(rec.theta_l[-1])}
             previous = (float(rec.time[-1]), int(chunk.lines[-1]))
             yield Block(rec, cuts)
 
