@@ -140,3 +140,36 @@ def test_a_disk_that_fills_up_during_estimate_names_the_output(rec_csv, tmp_path
     assert run.returncode == 2
     assert_one_line_error(run.stderr, f"cannot write {out}", "nothing was written")
     assert files_in(tmp_path) == ["rec.csv"]
+
+
+# ---------------------------------------------------------------- a current logged against the encoders
+
+
+def test_current_sign_negates_the_current_as_it_is_read(rec_csv, tmp_path, capsys):
+    rec = read_recording(rec_csv)
+    rec.i_m = -rec.i_m
+    flipped = tmp_path / "flipped.csv"
+    write_recording(flipped, rec)
+    code, _, err = run_cli(capsys, "estimate", flipped, "--engine", "batch", "--current-sign", "-1", "-o",
+                           tmp_path / "a.csv")
+    assert code == 0, err
+    assert run_cli(capsys, "estimate", rec_csv, "--engine", "batch", "-o", tmp_path / "b.csv")[0] == 0
+    assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()
+    code, _, err = run_cli(capsys, "estimate", rec_csv, "--current-sign", "2", "-o", tmp_path / "c.csv")
+    assert code == 2 and "--current-sign" in err
+
+
+def test_help_texts_are_whole_and_show_defaults(capsys):
+    code, out, _ = run_cli(capsys, "--help")
+    assert code == 0 and "130/143" in out and "(docs/robustness.md)." in out
+    code, out, _ = run_cli(capsys, "fleet", "generate", "--help")
+    assert code == 0 and "number of joints (default: 4)" in out and "(default: 6)" in out
+
+
+def test_the_demos_output_folder_is_ignored_by_git():
+    from pathlib import Path
+    root = Path(__file__).resolve().parents[2]
+    if not (root / ".git").exists():
+        pytest.skip("not a git checkout")
+    run = subprocess.run(["git", "-C", str(root), "check-ignore", "-q", "hdjoint-demo/report.html"])
+    assert run.returncode == 0

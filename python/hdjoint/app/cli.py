@@ -15,6 +15,9 @@ from hdjoint.io.outputs import OutputError
 from hdjoint.jobs.inputs import UserError, check_output_file, locked_output, read_params as _params
 from hdjoint.io.timebase import TIME_UNITS
 
+DESCRIPTION = ("Torque sensing for harmonic-drive robot joints: FMUs, simulation, torque estimation, diagnosis, "
+               "fleets. Exit code 0 on success, 2 for bad input or an output that must not be written, 1 for a "
+               "failure while running, 130/143 when stopped by SIGINT/SIGTERM (docs/robustness.md).")
 # The shortest recording simulate writes: ten samples at 1 kHz (the readers need two rows, a fit more).
 MIN_DURATION = 0.01
 
@@ -55,7 +58,8 @@ def cmd_estimate(args) -> int:
     from hdjoint.jobs.estimate import Options, estimate_to_file
     figures = estimate_to_file(Options(
         recording=args.recording, output=args.output, params=args.params, engine=args.engine, smooth=args.smooth,
-        time_unit=args.time_unit, split_gaps=args.split_gaps, allow_jitter=args.allow_jitter))
+        time_unit=args.time_unit, split_gaps=args.split_gaps, allow_jitter=args.allow_jitter,
+        current_sign=args.current_sign))
     if figures:
         print(f"{'estimate':<16} {'RMS error':>10} {'max error':>10}   (N.m, against tau_sensor)")
         for name, fig in figures.items():
@@ -65,7 +69,8 @@ def cmd_estimate(args) -> int:
 
 def cmd_diagnose(args) -> int:
     from hdjoint.jobs.diagnose import diagnose_to_directory
-    doc = diagnose_to_directory(args.recording, args.params, args.out, args.validate, args.time_unit)
+    doc = diagnose_to_directory(args.recording, args.params, args.out, args.validate, args.time_unit,
+                                args.current_sign)
     from hdjoint.diagnosis.validation import summary_line
     print(f"verdict: {doc['verdict']}")
     for s in doc.get("screening", []):
@@ -94,6 +99,9 @@ def cmd_demo(args) -> int:
 def _time_unit_argument(p) -> None:
     p.add_argument("--time-unit", choices=tuple(TIME_UNITS),
                    help="unit of the recording's time column (default: seconds, refused when implausible)")
+    p.add_argument("--current-sign", type=int, choices=(1, -1), default=1,
+                   help="-1: the current i_m is logged against the encoders' positive sense (e.g. LARA8 joints 1 "
+                        "and 2); it is negated as it is read (default: 1)")
 
 
 def _seed(text: str) -> int:
@@ -107,7 +115,7 @@ def _seed(text: str) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="hdjoint", description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(prog="hdjoint", description=DESCRIPTION)
     sub = ap.add_subparsers(dest="command", required=True)
 
     p = sub.add_parser("fmus", help="write every FMU the project builds into a directory")

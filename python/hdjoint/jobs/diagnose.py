@@ -19,7 +19,8 @@ def _progress(message: str) -> None:
 DIAGNOSIS_FILES = ("findings.json", "params.json", "params.ssv", "report.html")
 
 
-def diagnose_to_directory(recording, params, out, validate=(), time_unit: str | None = None) -> dict:
+def diagnose_to_directory(recording, params, out, validate=(), time_unit: str | None = None,
+                          current_sign: float = 1.0) -> dict:
     """Diagnose RECORDING (a path, or a list of paths of one joint, fitted
     jointly) against PARAMS (a JSON path, or None for the defaults; its
     "tolerance" object overrides the calibration priors) and write findings.json, params.json, params.ssv and
@@ -28,17 +29,17 @@ def diagnose_to_directory(recording, params, out, validate=(), time_unit: str | 
     paths = [recording] if isinstance(recording, (str, Path)) else list(recording)
     check_output_directory(out, DIAGNOSIS_FILES, inputs=(*paths, params, *validate))  # before any work
     with locked_output(out):
-        return _diagnose_locked(paths, params, out, validate, time_unit)
+        return _diagnose_locked(paths, params, out, validate, time_unit, current_sign)
 
 
-def _diagnose_locked(paths, params, out, validate, time_unit) -> dict:
+def _diagnose_locked(paths, params, out, validate, time_unit, current_sign) -> dict:
     from hdjoint.io import parameters
     from hdjoint.diagnosis import report
     from hdjoint.diagnosis.prepare import DiagnosisError
     from hdjoint.diagnosis.pipeline import diagnose
     from hdjoint.diagnosis.validation import validate as validate_on
-    recs = [read_recording(path, time_unit) for path in paths]
-    others = [read_recording(path, time_unit) for path in validate]  # read first: a bad file stops before any work
+    recs = [read_recording(path, time_unit, current_sign) for path in paths]
+    others = [read_recording(path, time_unit, current_sign) for path in validate]  # read first: a bad file stops before any work
     recs, screened = _screened(recs)
     others, screened_others = _screened(others)
     nominal = read_params(params)

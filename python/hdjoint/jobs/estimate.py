@@ -33,6 +33,7 @@ class Options:
     time_unit: str | None = None
     split_gaps: bool = False
     allow_jitter: bool = False
+    current_sign: float = 1.0  # -1: the current is logged against the encoders' sense
     block_rows: int = CHUNK_ROWS  # rows read, estimated and written at a time
 
 
@@ -75,6 +76,7 @@ class TimedBlocks:
             if chunk is None:
                 return
             chunk.recording.time = chunk.recording.time * factor
+            chunk.recording.i_m = chunk.recording.i_m * self.opts.current_sign
             yield chunk
 
     def __iter__(self):

@@ -22,14 +22,16 @@ def read_params(path):
         raise UserError(str(e)) from None
 
 
-def read_recording(path, time_unit: str | None = None):
+def read_recording(path, time_unit: str | None = None, current_sign: float = 1.0):
     """The whole recording, its time column converted to seconds from TIME_UNIT
-    (None: seconds, with the unit checked for plausibility)."""
+    (None: seconds, with the unit checked for plausibility), its current
+    multiplied by CURRENT_SIGN (-1: a current logged against the encoders' sense)."""
     from hdjoint.io.recording import RecordingError, read_recording as read
     from hdjoint.io.timebase import TIME_UNITS, TimeBaseError, check_step
     try:
         rec = read(path)
         rec.time = rec.time * TIME_UNITS[time_unit or "s"]
+        rec.i_m = rec.i_m * current_sign
         check_step(str(path), rec.median_step, time_unit)
     except (RecordingError, TimeBaseError) as e:
         raise UserError(str(e)) from None
