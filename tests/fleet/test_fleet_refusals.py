@@ -169,3 +169,20 @@ def test_a_params_map_pattern_used_for_nothing_is_named(tmp_path, recording, cap
     plan([str(tmp_path / "logs/*.csv")], str(tmp_path / "map.json"), None)
     err = capsys.readouterr().err
     assert "'log/*.csv' is used for none of the recordings" in err and "'logs/*.csv'" not in err
+
+
+# ---------------------------------------------------------------- fleet.html
+
+
+def test_fleet_html_takes_any_joint_id_and_escapes_every_field(tmp_path):
+    from hdjoint.fleet.report import write_report
+    rng = np.random.default_rng(2)
+    found = []
+    for joint in ("$x^$", "$\\frac{a}{b}$ <b>"):
+        for day in range(6):
+            found.append({"joint": joint, "date": f"2026-01-0{day + 1}", "status": "ok", "recording": f"/r/{day}.csv",
+                          "command": "<script>alert(1)</script>", "param.Fc": 0.02 * (1 + 0.08 * day),
+                          "param.Kf": 5e4 * (1 + 0.01 * rng.standard_normal())})
+    page = write_report(tmp_path, found).read_text()  # raised in mathtext before
+    assert "<script>" not in page and "&lt;script&gt;" in page
+    assert page.count("<img") == 2 and "&lt;b&gt;" in page
