@@ -173,3 +173,12 @@ def test_the_demos_output_folder_is_ignored_by_git():
         pytest.skip("not a git checkout")
     run = subprocess.run(["git", "-C", str(root), "check-ignore", "-q", "hdjoint-demo/report.html"])
     assert run.returncode == 0
+
+
+def test_an_unexplained_residual_without_a_peak_reads_as_a_sentence():
+    from hdjoint.app.cli import diagnosis_lines
+    doc = {"verdict": "unexplained", "findings": [], "unexplained": [
+        {"channel": "transmission", "feature": "theta_l", "largest_at": "-"},
+        {"channel": "motor", "feature": "omega_m", "largest_at": "omega_m = 3.1 rad/s"}]}
+    assert diagnosis_lines(doc)[1:] == ["  unexplained: transmission residual depends on theta_l",
+                                        "  unexplained: motor residual depends on omega_m (largest at omega_m = 3.1 rad/s)"]

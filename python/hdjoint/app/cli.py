@@ -64,6 +64,8 @@ def cmd_estimate(args) -> int:
         print(f"{'estimate':<16} {'RMS error':>10} {'max error':>10}   (N.m, against tau_sensor)")
         for name, fig in figures.items():
             print(f"{name:<16} {fig.rms:>10.4f} {fig.max:>10.4f}")
+    else:
+        print(f"wrote {args.output} (the recording has no tau_sensor: no error figures)")
     return 0
 
 
@@ -71,21 +73,27 @@ def cmd_diagnose(args) -> int:
     from hdjoint.jobs.diagnose import diagnose_to_directory
     doc = diagnose_to_directory(args.recording, args.params, args.out, args.validate, args.time_unit,
                                 args.current_sign)
-    from hdjoint.diagnosis.validation import summary_line
-    print(f"verdict: {doc['verdict']}")
-    for s in doc.get("screening", []):
-        if s["outliers_left_out"]:
-            print(f"  screening: {s['recording']}: {s['summary']}")
-    for f in doc["findings"]:
-        fit = f["fit"]
-        print(f"  {f['effect']:<28} {f['where']['part']:<13} confidence {f['confidence']:.2f}  held-out RMS "
-              f"{fit['holdout_rms_before']:.4f} -> {fit['holdout_rms_after']:.4f} N.m")
-    for u in doc["unexplained"]:
-        print(f"  unexplained: {u['channel']} residual depends on {u['feature']} (largest at {u['largest_at']})")
-    for v in doc.get("validation", []):
-        print(f"  validation: {summary_line(v)}")
+    for line in diagnosis_lines(doc):
+        print(line)
     print(f"wrote {args.out}/findings.json, params.json, params.ssv, report.html ({doc['seconds']} s)")
     return 0
+
+
+def diagnosis_lines(doc: dict) -> list[str]:
+    """What `hdjoint diagnose` prints of its findings document."""
+    from hdjoint.diagnosis.validation import summary_line
+    lines = [f"verdict: {doc['verdict']}"]
+    lines += [f"  screening: {s['recording']}: {s['summary']}" for s in doc.get("screening", [])
+              if s["outliers_left_out"]]
+    for f in doc["findings"]:
+        fit = f["fit"]
+        lines.append(f"  {f['effect']:<28} {f['where']['part']:<13} confidence {f['confidence']:.2f}  held-out RMS "
+                     f"{fit['holdout_rms_before']:.4f} -> {fit['holdout_rms_after']:.4f} N.m")
+    for u in doc["unexplained"]:
+        where = f" (largest at {u['largest_at']})" if u.get("largest_at") not in (None, "", "-") else ""
+        lines.append(f"  unexplained: {u['channel']} residual depends on {u['feature']}{where}")
+    lines += [f"  validation: {summary_line(v)}" for v in doc.get("validation", [])]
+    return lines
 
 
 def cmd_demo(args) -> int:
