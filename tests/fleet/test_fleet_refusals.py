@@ -6,6 +6,7 @@ cluster starts; a params-map pattern used for nothing is named."""
 from __future__ import annotations
 
 import json
+import signal
 import socket
 import subprocess
 import sys
@@ -186,3 +187,26 @@ def test_fleet_html_takes_any_joint_id_and_escapes_every_field(tmp_path):
     page = write_report(tmp_path, found).read_text()  # raised in mathtext before
     assert "<script>" not in page and "&lt;script&gt;" in page
     assert page.count("<img") == 2 and "&lt;b&gt;" in page
+
+
+def test_a_second_fleet_on_the_same_out_is_refused_while_the_first_runs(tmp_path, recording):
+    out = tmp_path / "out"
+    argv = [*CLI, "fleet", "estimate", str(recording), "--workers", "1", "--quiet", "--out", str(out)]
+    first = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    lock = tmp_path / ".out.lock"
+    end = time.monotonic() + 60
+    def held():  # the holder writes its pid once it has the lock
+        try:
+            return lock.read_text().strip() == str(first.pid)
+        except FileNotFoundError:
+            return False
+    while not held() and first.poll() is None and time.monotonic() < end:
+        time.sleep(0.005)
+    first.send_signal(signal.SIGSTOP)  # hold it while the second tries
+    try:
+        second = subprocess.run(argv, capture_output=True, text=True, timeout=60)
+    finally:
+        first.send_signal(signal.SIGCONT)
+    assert second.returncode == 2 and "another hdjoint run" in _one_line(second.stderr)
+    first.communicate(timeout=120)
+    assert first.returncode == 0 and not lock.exists()

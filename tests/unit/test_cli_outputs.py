@@ -216,3 +216,11 @@ def test_a_killed_diagnosis_staging_folder_is_removed_by_the_next_run(rec_csv, t
     assert run.returncode == 0, run.stderr
     assert "Traceback" not in run.stderr  # its forked workers, stopped with SIGTERM at the end, die quietly
     assert files_in(target) == ["findings.json", "params.json", "params.ssv", "report.html"]
+
+
+def test_fmus_never_writes_into_a_fifo_named_like_an_fmu(tmp_path, capsys):
+    os.mkfifo(tmp_path / "JointController.fmu")  # opening it to write would block for ever
+    code, _, err = run_cli(capsys, "fmus", "--out", tmp_path)
+    assert code == 2
+    assert_one_line_error(err, "JointController.fmu", "FIFO")
+    assert files_in(tmp_path) == ["JointController.fmu"]

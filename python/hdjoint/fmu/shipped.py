@@ -19,12 +19,19 @@ def fmu_path(name: str) -> Path:
 
 
 def export_fmus(out_dir: str | Path) -> list[Path]:
-    """Copy every FMU into out_dir; returns the written paths."""
+    """Copy every FMU into out_dir (each through a temporary file, never over
+    a device node, a FIFO or a read-only file); returns the written paths."""
+    from hdjoint.io.outputs import check_replaceable, replace_into, temp_path
     out = Path(out_dir)
+    targets = [out / f"{name}.fmu" for name in FMU_NAMES]
+    for target in targets:
+        check_replaceable(target)  # before anything is written
     out.mkdir(parents=True, exist_ok=True)
-    written = []
-    for name in FMU_NAMES:
-        target = out / f"{name}.fmu"
-        shutil.copyfile(fmu_path(name), target)
-        written.append(target)
-    return written
+    for name, target in zip(FMU_NAMES, targets):
+        tmp = temp_path(target)
+        try:
+            shutil.copyfile(fmu_path(name), tmp)
+            replace_into(tmp, target)
+        finally:
+            Path(tmp).unlink(missing_ok=True)
+    return targets
