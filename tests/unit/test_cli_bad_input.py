@@ -182,3 +182,18 @@ def test_an_unexplained_residual_without_a_peak_reads_as_a_sentence():
         {"channel": "motor", "feature": "omega_m", "largest_at": "omega_m = 3.1 rad/s"}]}
     assert diagnosis_lines(doc)[1:] == ["  unexplained: transmission residual depends on theta_l",
                                         "  unexplained: motor residual depends on omega_m (largest at omega_m = 3.1 rad/s)"]
+
+
+def test_estimate_warns_of_a_wild_sample_naming_its_line(rec_csv, tmp_path, capsys):
+    rec = read_recording(rec_csv)
+    rec.i_m[700] = 1e300  # the UKF skipped thousands of updates after it, silently
+    write_recording(rec_csv, rec)
+    code, _, err = run_cli(capsys, "estimate", rec_csv, "--engine", "batch", "-o", tmp_path / "e.csv")
+    assert code == 0
+    warning = next(line for line in err.splitlines() if "wild sample" in line)
+    assert str(rec_csv) in warning and "line 702 i_m = 1e+300" in warning
+
+
+def test_estimate_on_a_clean_recording_warns_of_nothing(rec_csv, tmp_path, capsys):
+    code, _, err = run_cli(capsys, "estimate", rec_csv, "--engine", "batch", "-o", tmp_path / "e.csv")
+    assert code == 0 and "wild" not in err

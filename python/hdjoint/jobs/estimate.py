@@ -15,7 +15,7 @@ from hdjoint.estimation.engines import BothEngines, CoreEngine, FmuEngine, RowFe
 from hdjoint.estimation.smoother import SMOOTH_COLUMNS, SmoothedRows
 from hdjoint.jobs.inputs import UserError, check_output_file, locked_output, read_params
 from hdjoint.estimation.metrics import RunningErrorFigures
-from hdjoint.io.screening import Degenerate, check_no_wrap
+from hdjoint.io.screening import Degenerate, check_no_wrap, find_outliers
 from hdjoint.io.recording import CHUNK_ROWS, CsvWriter, Recording, RecordingError, iter_recording
 from hdjoint.io.timebase import (TIME_UNITS, TimeBaseError, check_step, describe, given_ts, irregular_steps,
     sample_period)
@@ -61,6 +61,7 @@ class TimedBlocks:
         self._guard(check_step, opts.recording, self.step, opts.time_unit, self.ts)
         self.gaps: list[str] = []
         self._angles = None  # the last row's angles, for a wrap across blocks
+        self.wild: list[tuple[str, int, float]] = []  # (column, line, value) of wild samples (io.screening)
 
     def _guard(self, fn, *args):
         try:
@@ -98,6 +99,9 @@ class TimedBlocks:
                     raise UserError(f"{self.opts.recording}: {text}; the estimator assumes a fixed sample period "
                                     f"(pass {hint} to accept it, see docs/robustness.md)")
             self._guard(check_no_wrap, rec, chunk.lines, self._angles)
+            for name in ("i_m", "theta_m", "theta_l"):
+                x = getattr(rec, name)
+                self.wild += [(name, int(chunk.lines[k]), float(x[k])) for k in find_outliers(x, rec.time)]
             self._angles = {"theta_m": float(rec.theta_m[-1]), "theta_l": float(rec.theta_l[-1])}
             previous = (float(rec.time[-1]), int(chunk.lines[-1]))
             yield Block(rec, cuts)
@@ -136,6 +140,12 @@ def _estimate_locked(opts: Options) -> dict:
         figures = _estimate(opts, blocks, params)
     except RuntimeError as e:  # FmuError, or the batch path's invalid input
         raise UserError(f"{opts.recording}: {e}") from None
+    if blocks.wild:
+        shown = ", ".join(f"line {line} {name} = {value:.4g}" for name, line, value in blocks.wild[:5])
+        more = f" and {len(blocks.wild) - 5} more" if len(blocks.wild) > 5 else ""
+        print(f"warning: {opts.recording}: {len(blocks.wild)} wild sample{'s' if len(blocks.wild) > 1 else ''} "
+              f"({shown}{more}): the estimates around them are unreliable (hdjoint diagnose leaves such samples "
+              "out)", file=sys.stderr)
     if ts_from_recording and abs(blocks.ts - 1e-3) > 1e-9:
         print(f"note: estimator sample period Ts = {blocks.ts:g} s (the recording's median step)", file=sys.stderr)
     return figures
