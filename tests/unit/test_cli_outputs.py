@@ -224,3 +224,19 @@ def test_fmus_never_writes_into_a_fifo_named_like_an_fmu(tmp_path, capsys):
     assert code == 2
     assert_one_line_error(err, "JointController.fmu", "FIFO")
     assert files_in(tmp_path) == ["JointController.fmu"]
+
+
+def test_ctrl_c_during_a_diagnosis_prints_one_line_from_all_its_processes(long_csv, tmp_path):
+    """Ctrl-C reaches the whole process group, the diagnosis's forked workers too."""
+    target = tmp_path / "out"
+    proc = subprocess.Popen([*CLI, "diagnose", str(long_csv), "--out", str(target)], stderr=subprocess.PIPE,
+                            text=True, start_new_session=True)
+    _wait_for(lambda: "testing" in proc.stderr.readline(), proc=proc)  # the workers are fitting
+    time.sleep(0.5)
+    os.killpg(proc.pid, signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130
+    assert "Traceback" not in err and "ForkPoolWorker" not in err
+    assert_one_line_error("\n".join(line for line in err.splitlines() if not line.startswith("[diagnose]")),
+                          "hdjoint diagnose:", "interrupted")
+    assert not target.exists()
