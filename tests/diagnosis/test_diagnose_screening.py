@@ -133,6 +133,7 @@ def test_findings_json_is_strict_json(clean):
 
 def test_strict_json_turns_every_non_finite_number_into_null():
     from hdjoint.io.screening import strict_json
-    doc = {"a": math.nan, "b": [np.float64(np.inf), 1.5, np.int64(3)], "c": {"d": -math.inf}, "e": np.array([1.0, np.nan])}
+    doc = {"a": math.nan, "b": [np.float64(np.inf), 1.5, np.int64(3)], "c": {"d": -math.inf},
+           "e": np.array([1.0, np.nan])}
     assert json.dumps(strict_json(doc), allow_nan=False) == \
         '{"a": null, "b": [null, 1.5, 3], "c": {"d": null}, "e": [1.0, null]}'

@@ -181,7 +181,8 @@ def test_an_unexplained_residual_without_a_peak_reads_as_a_sentence():
         {"channel": "transmission", "feature": "theta_l", "largest_at": "-"},
         {"channel": "motor", "feature": "omega_m", "largest_at": "omega_m = 3.1 rad/s"}]}
     assert diagnosis_lines(doc)[1:] == ["  unexplained: transmission residual depends on theta_l",
-                                        "  unexplained: motor residual depends on omega_m (largest at omega_m = 3.1 rad/s)"]
+                                        "  unexplained: motor residual depends on omega_m "
+                                        "(largest at omega_m = 3.1 rad/s)"]
 
 
 def test_estimate_warns_of_a_wild_sample_naming_its_line(rec_csv, tmp_path, capsys):

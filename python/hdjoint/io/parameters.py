@@ -193,7 +193,7 @@ def check_tolerances(overrides, source: str = "parameter set") -> dict[str, floa
             raise ParameterError(f"{source}: '{TOLERANCE_KEY}' names '{name}', which the diagnosis never calibrates")
         lo, hi = TOLERANCE_RANGE
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not lo <= value <= hi:  # NaN fails too
-            raise ParameterError(f"{source}: tolerance of '{name}' must be a number from {lo:g} to {hi:g} "
+            raise ParameterError(f"{source}: tolerance of '{name}' must be a positive number from {lo:g} to {hi:g} "
                                  f"(a fraction of the nominal value, 0.1 for +-10 %), not {value!r}")
         checked[name] = float(value)
     return checked

@@ -251,7 +251,6 @@ def screen(rec: Recording, line_of=None) -> tuple[Recording, Screening]:
     found.outliers.sort(key=lambda o: (o.row, CHANNELS.index(o.channel)))
     if not columns:
         return rec, found
-    cleaned = Recording(time=rec.time.copy(), i_m=columns.get("i_m", rec.i_m), theta_m=columns.get("theta_m", rec.theta_m),
-                        theta_l=columns.get("theta_l", rec.theta_l),
-                        tau_sensor=columns.get("tau_sensor", rec.tau_sensor), extra=dict(rec.extra), path=rec.path)
+    kept = {name: columns.get(name, getattr(rec, name)) for name in CHANNELS}
+    cleaned = Recording(time=rec.time.copy(), extra=dict(rec.extra), path=rec.path, **kept)
     return cleaned, found

@@ -39,7 +39,8 @@ def _diagnose_locked(paths, params, out, validate, time_unit, current_sign) -> d
     from hdjoint.diagnosis.pipeline import diagnose
     from hdjoint.diagnosis.validation import validate as validate_on
     recs = [read_recording(path, time_unit, current_sign) for path in paths]
-    others = [read_recording(path, time_unit, current_sign) for path in validate]  # read first: a bad file stops before any work
+    # The other recordings are read first too: a bad file stops before any work.
+    others = [read_recording(path, time_unit, current_sign) for path in validate]
     recs, screened = _screened(recs)
     others, screened_others = _screened(others)
     nominal = read_params(params)
@@ -100,8 +101,8 @@ def write_diagnosis(out, doc: dict, page: str) -> None:
         sweep_debris(out / "stage")
         stage = Path(temp_path(out / "stage"))
         stage.mkdir()
-        for name, write in (("findings.json", lambda p: p.write_text(json.dumps(strict_json(doc), indent=2, allow_nan=False)
-                                                      + "\n")),
+        findings = json.dumps(strict_json(doc), indent=2, allow_nan=False) + "\n"  # strict JSON: NaN is null
+        for name, write in (("findings.json", lambda p: p.write_text(findings)),
                             ("params.json", lambda p: parameters.save(p, doc["params"])),
                             ("params.ssv", lambda p: parameters.save_ssv(p, doc["params"], name="hdjoint corrected")),
                             ("report.html", lambda p: p.write_text(page))):
