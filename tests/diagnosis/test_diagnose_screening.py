@@ -137,3 +137,24 @@ def test_strict_json_turns_every_non_finite_number_into_null():
            "e": np.array([1.0, np.nan])}
     assert json.dumps(strict_json(doc), allow_nan=False) == \
         '{"a": null, "b": [null, 1.5, 3], "c": {"d": null}, "e": [1.0, null]}'
+
+
+# ---------------------------------------------------------------- the report reads as numbers, once
+
+
+def test_the_report_never_shows_minus_zero(clean):
+    import re
+    path, _ = clean
+    page = re.sub(r"data:image/png;base64,[A-Za-z0-9+/=]+", "", (path.parent / "out" / "report.html").read_text())
+    assert not re.search(r"-0\.0+(?![0-9])", page)
+
+
+def test_what_to_record_next_names_each_reason_once():
+    from hdjoint.diagnosis.report import _summary
+    reason = "not testable on this recording: the motor reverses fewer than twice"
+    doc = {"verdict": "consistent", "findings": [], "beyond_tolerance": [], "calibration": {}, "unexplained": [],
+           "cannot_tell": [], "not_testable": [{"effect": e, "reason": reason}
+                                               for e in ("wave_generator_load", "coulomb_friction", "hysteresis")]}
+    text = _summary(doc)
+    assert text.count("the motor reverses fewer than twice") == 1
+    assert "wave_generator_load, coulomb_friction, hysteresis" in text
