@@ -158,3 +158,10 @@ def test_what_to_record_next_names_each_reason_once():
     text = _summary(doc)
     assert text.count("the motor reverses fewer than twice") == 1
     assert "wave_generator_load, coulomb_friction, hysteresis" in text
+
+
+def test_the_calibration_table_gives_each_parameter_its_unit_and_meaning(clean):
+    path, _ = clean
+    page = (path.parent / "out" / "report.html").read_text()
+    assert "<td>Kt</td><td>N.m/A</td><td>motor torque constant</td>" in page
+    assert "<td>Kf</td><td>N.m/rad</td><td>flexspline stiffness at zero torque</td>" in page

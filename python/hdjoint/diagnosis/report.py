@@ -4,6 +4,7 @@ model added and the fit before and after."""
 from __future__ import annotations
 
 import html
+import re
 
 import matplotlib
 
@@ -43,6 +44,16 @@ def _table(rows, header) -> str:
 
 def _fmt(x) -> str:
     return f"{x:.4g}" if isinstance(x, (int, float)) else str(x)
+
+
+def _meaning(name: str) -> tuple[str, str]:
+    """A parameter's unit and the first clause of its description (the parameter table's), or blanks."""
+    from hdjoint.io.parameters import table
+    info = table().get(name)
+    if info is None:
+        return "", ""
+    short = re.split(r"; |: | \(|, eq\.", info.description)[0]
+    return ("" if info.unit == "1" else info.unit), short
 
 
 def _fixed(x: float, digits: int = 2) -> str:
@@ -87,6 +98,8 @@ def _finding_line(f: dict) -> str:
     values = "; ".join(
         f"{html.escape(n)} = {_fmt(v)}" + (f" [{_fmt(intervals[n][0])}, {_fmt(intervals[n][1])}]"
                                           if intervals.get(n) else "")
+        + (f" {html.escape(_meaning(n)[0])}" if _meaning(n)[0] else "")
+        + (f" ({html.escape(_meaning(n)[1])})" if _meaning(n)[1] else "")
         for n, v in f["parameters"].items())
     caveat = f.get("in_the_estimator", {}).get("caveat")
     values += f". <i>Caveat: {html.escape(caveat)}</i>" if caveat else ""
@@ -272,12 +285,14 @@ def build(result, doc: dict) -> str:
     if doc.get("validation"):
         sections.append(_validation_section(doc["validation"]))
 
-    cal = [(n, _fmt(v["nominal"]), _fmt(v["estimate"]), f"[{_fmt(v['lo'])}, {_fmt(v['hi'])}]", _fmt(v["tolerance"]),
-            _fixed(v['z']), "yes" if v["identified"] else "no") for n, v in doc["calibration"].items()]
+    cal = [(n, *_meaning(n), _fmt(v["nominal"]), _fmt(v["estimate"]), f"[{_fmt(v['lo'])}, {_fmt(v['hi'])}]",
+            _fmt(v["tolerance"]), _fixed(v['z']), "yes" if v["identified"] else "no")
+           for n, v in doc["calibration"].items()]
     sections.append("<h2>Calibration of the nominal parameters</h2><p>Maximum a posteriori, each parameter's "
                     "tolerance its prior; 95 % intervals from the Laplace approximation; z = (estimate - nominal) / "
                     "tolerance; identified: the recording narrows the prior by more than half.</p>" + _table(
-                        cal, ["parameter", "nominal", "estimate", "95 % interval", "tolerance", "z", "identified"]))
+                        cal, ["parameter", "unit", "meaning", "nominal", "estimate", "95 % interval", "tolerance", "z",
+                              "identified"]))
     if doc["unexplained"]:
         sections.append("<h2>Unexplained structure</h2>" + _table(
             [(u["channel"], u["feature"], u["held_out_gain"], u["largest_at"]) for u in doc["unexplained"]],
