@@ -210,3 +210,10 @@ def test_a_second_fleet_on_the_same_out_is_refused_while_the_first_runs(tmp_path
     assert second.returncode == 2 and "another hdjoint run" in _one_line(second.stderr)
     first.communicate(timeout=120)
     assert first.returncode == 0 and not lock.exists()
+
+
+def test_fleet_html_states_its_ranking_rule(tmp_path):
+    from hdjoint.fleet.report import build
+    found = [{"joint": "j", "date": f"2026-01-0{d + 1}", "status": "ok", "recording": f"/r/{d}.csv",
+              "command": "diagnose", "param.Fc": 0.02 * (1 + 0.01 * d)} for d in range(6)]
+    assert "Ranking: drifting joints first, then each group by its p-value" in build(found)

@@ -54,7 +54,10 @@ def _ranking(drifts) -> str:
             f"tested (Bonferroni). Drifting: p &lt; {trend.ALPHA} and a change over the period of at least the "
             f"parameter's tolerance (or {trend.RELEVANT_CHANGE:.0%} of its first value where none is stated), so "
             f"a joint without drift is flagged with probability at most {trend.ALPHA:.0%} (measured false-alarm "
-            f"rate: docs/fleet.md).</p>"
+            f"rate: docs/fleet.md). Ranking: drifting joints first, then each group by its p-value (smallest "
+            f"first); the effect and quantity shown are those of the joint's smallest p-value, so a joint that is "
+            f"not drifting may show a large change that is not significant, or a significant one below its "
+            f"tolerance.</p>"
             + _html_table(("rank", "joint", "drift p", "drifting", "effect", "quantity", "direction",
                            "change over the period (%)", "slope per day", "quantities tested"), body, marked))
 
