@@ -165,3 +165,22 @@ def test_the_calibration_table_gives_each_parameter_its_unit_and_meaning(clean):
     page = (path.parent / "out" / "report.html").read_text()
     assert "<td>Kt</td><td>N.m/A</td><td>motor torque constant</td>" in page
     assert "<td>Kf</td><td>N.m/rad</td><td>flexspline stiffness at zero torque</td>" in page
+
+
+@pytest.mark.parametrize("figure", ["residual_vs_feature", "order_spectrum"])
+def test_the_nominal_curve_shows_beneath_an_equal_corrected_one(figure):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from hdjoint.diagnosis import plots
+    x = np.linspace(0.0, 10.0, 500)
+    y = np.sin(3 * x)
+    fig, ax = plt.subplots()
+    if figure == "residual_vs_feature":
+        plots.residual_vs_feature(ax, x, y, y.copy(), "speed")
+    else:
+        plots.order_spectrum(ax, x, y, y.copy(), [1, 2, 3], "theta_m")
+    nominal, corrected = (line for line in ax.get_lines() if line.get_label() in ("calibrated nominal", "corrected"))
+    assert nominal.get_label() == "calibrated nominal"
+    assert corrected.get_linestyle() == "--" and nominal.get_linewidth() > corrected.get_linewidth()
+    plt.close(fig)
