@@ -33,6 +33,7 @@ lists, so any finding replays with `replay` and shrinks with `minimise`.
 from __future__ import annotations
 
 import ctypes
+import faulthandler
 import json
 import math
 import os
@@ -40,6 +41,7 @@ import random
 import select
 import signal
 import struct
+import tempfile
 import time
 from collections import Counter
 from dataclasses import dataclass, field
@@ -776,6 +778,7 @@ class Outcome:
     calls: int
     findings: list = field(default_factory=list)  # (category, op index, detail)
     seconds: float = 0.0
+    trace: str = ""  # a crashed child's fatal-error trace (faulthandler), kept off the test log
 
 
 def _child_main(fmu: LoadedFmu, foreign: dict, ops: list, fd: int) -> None:
@@ -815,12 +818,17 @@ def run_sequence(fmu: LoadedFmu, ops: list, foreign: dict, timeout: float, seed:
     time, BACKSTOP_FACTOR * TIMEOUT by default); classify crash and hang here, the rest in the child."""
     backstop = BACKSTOP_FACTOR * timeout if backstop is None else backstop
     read_fd, write_fd = os.pipe()
+    # The child's fatal-error trace (faulthandler, which pytest enables) goes here, into the finding,
+    # not onto the test log, where a crash made on purpose read like a real one.
+    trace = tempfile.TemporaryFile()
     start = time.monotonic()
     pid = os.fork()
     if pid == 0:  # the child
         os.close(read_fd)
         code = 0
         try:
+            if faulthandler.is_enabled():
+                faulthandler.enable(file=trace)
             signal.signal(signal.SIGPROF, signal.SIG_DFL)  # its default action ends the process
             signal.setitimer(signal.ITIMER_PROF, timeout)  # counts this process's CPU time only
             _child_main(fmu, foreign, ops, write_fd)
@@ -869,7 +877,12 @@ def run_sequence(fmu: LoadedFmu, ops: list, foreign: dict, timeout: float, seed:
         elif not done or os.WIFSIGNALED(status) or os.WEXITSTATUS(status) != 0:
             how = (f"signal {signal.Signals(os.WTERMSIG(status)).name}" if os.WIFSIGNALED(status)
                    else f"exit {os.WEXITSTATUS(status)}")
-            outcome.findings.append(("crash", last_call, f"{at}: {how}"))
+            trace.seek(0)
+            captured = trace.read().decode(errors="replace").strip()
+            first = next((line for line in captured.splitlines() if line.startswith("Fatal Python error")), "")
+            outcome.findings.append(("crash", last_call, f"{at}: {how}" + (f" ({first})" if first else "")))
+            outcome.trace = captured
+    trace.close()
     outcome.calls = last_call + 1
     outcome.seconds = time.monotonic() - start
     return outcome

@@ -75,10 +75,14 @@ def test_no_non_finite_output_after_ok(outcomes):
 # ---- the harness itself: what it must classify
 
 
-def test_a_child_killed_by_a_signal_is_a_crash(campaign):
+def test_a_child_killed_by_a_signal_is_a_crash(campaign, capfd):
+    capfd.readouterr()
     outcome = campaign.replay("JointController", [["instantiate"], ["_selftest", "crash", 0]], TIMEOUT)
     assert [(f[0], f[1]) for f in outcome.findings] == [("crash", 1)]
     assert "SIGSEGV" in outcome.findings[0][2]
+    # The crash made on purpose: its trace is captured in the outcome, not printed on the test log.
+    assert "Fatal Python error: Segmentation fault" in outcome.trace
+    assert "Fatal Python error" not in capfd.readouterr().err
 
 
 def test_an_unbounded_loop_is_a_hang_once_it_has_used_its_cpu_budget(campaign):

@@ -4,6 +4,8 @@ import os
 import pickle
 
 import numpy as np
+
+from hdjoint.io.outputs import OutputError
 import pytest
 
 from hdjoint.io import recording
@@ -267,7 +269,7 @@ def test_write_failure_mid_write_leaves_nothing_and_keeps_old_file(tmp_path, mon
         raise OSError("disk full")
 
     monkeypatch.setattr(recording.os, "replace", failing_replace)
-    with pytest.raises(OSError, match="disk full"):
+    with pytest.raises(OutputError, match="disk full"):  # one line naming the path: exit 2 at the command line
         write_csv(path, {"a": np.arange(1000.0)})
     assert os.listdir(tmp_path) == ["out.csv"]
     assert path.read_text() == "old contents\n"

@@ -3,7 +3,7 @@ torsion_less_kinematic) is kept as a basis linear in the kinematic error's
 amplitudes: a fit that moves a0, eq. (7)'s amplitudes or an extra order's
 must get the same torsion, high-pass part and rate as the compliance model
 run afresh, without running it again. (Running it for every move of a0 was
-5 of the 22 s of CPU a 58 s recording's diagnosis took; docs/speed.md.)"""
+5 of the 22 s of CPU a 58 s recording's diagnosis took; benchmarks/bench_diagnosis.py.)"""
 import numpy as np
 import pytest
 

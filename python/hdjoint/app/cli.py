@@ -6,10 +6,20 @@ Heavy modules are imported inside the subcommands, so `hdjoint --help` is quick.
 from __future__ import annotations
 
 import argparse
+import math
+import os
+import signal
 import sys
 
-from hdjoint.jobs.inputs import UserError, check_output_file, read_params as _params
+from hdjoint.io.outputs import OutputError
+from hdjoint.jobs.inputs import UserError, check_output_file, locked_output, read_params as _params
 from hdjoint.io.timebase import TIME_UNITS
+
+DESCRIPTION = ("Torque sensing for harmonic-drive robot joints: FMUs, simulation, torque estimation, diagnosis, "
+               "fleets. Exit code 0 on success, 2 for bad input or an output that must not be written, 1 for a "
+               "failure while running, 130/143 when stopped by SIGINT/SIGTERM (docs/robustness.md).")
+# The shortest recording simulate writes: ten samples at 1 kHz (the readers need two rows, a fit more).
+MIN_DURATION = 0.01
 
 
 def cmd_fmus(args) -> int:
@@ -20,15 +30,27 @@ def cmd_fmus(args) -> int:
     return 0
 
 
+def _check_simulate(args, experiments) -> None:
+    if args.experiment not in experiments.EXPERIMENTS:
+        raise UserError(f"--experiment {args.experiment}: unknown; known: {', '.join(experiments.EXPERIMENTS)}")
+    if args.duration is not None:
+        longest = experiments.EXPERIMENTS[args.experiment].duration
+        if not math.isfinite(args.duration) or not MIN_DURATION <= args.duration <= longest:
+            raise UserError(f"--duration {args.duration:g}: must be from {MIN_DURATION:g} s to the experiment's "
+                            f"length, {longest:g} s ({args.experiment}); leave it out for the whole experiment")
+
+
 def cmd_simulate(args) -> int:
     from hdjoint.fmu import experiments
     from hdjoint.io.recording import write_recording
+    _check_simulate(args, experiments)
     check_output_file(args.output, inputs=(args.params, args.joint))  # before any work
     nominal = _params(args.params)
     joint = _params(args.joint) if args.joint else experiments.true_joint_parameters(nominal)
-    rec = experiments.run(args.experiment, joint=joint, nominal=nominal, duration=args.duration,
-                          sensors=experiments.Sensors(seed=args.seed))
-    write_recording(args.output, rec)
+    with locked_output(args.output):
+        rec = experiments.run(args.experiment, joint=joint, nominal=nominal, duration=args.duration,
+                              sensors=experiments.Sensors(seed=args.seed))
+        write_recording(args.output, rec)
     print(f"{args.output}: {len(rec)} samples, {rec.duration:.3f} s ({args.experiment})")
     return 0
 
@@ -37,7 +59,7 @@ def cmd_estimate(args) -> int:
     from hdjoint.jobs.estimate import Options, estimate_to_file
     opts = Options(recording=args.recording, output=args.output, params=args.params, engine=args.engine,
                    smooth=args.smooth, time_unit=args.time_unit, split_gaps=args.split_gaps,
-                   allow_jitter=args.allow_jitter)
+                   allow_jitter=args.allow_jitter, current_sign=args.current_sign)
     if args.calibrate_from:
         from hdjoint.jobs.calibrate import estimate_calibrated, sidecars
         figures = estimate_calibrated(opts, args.calibrate_from)
@@ -48,24 +70,36 @@ def cmd_estimate(args) -> int:
         print(f"{'estimate':<16} {'RMS error':>10} {'max error':>10}   (N.m, against tau_sensor)")
         for name, fig in figures.items():
             print(f"{name:<16} {fig.rms:>10.4f} {fig.max:>10.4f}")
+    else:
+        print(f"wrote {args.output} (the recording has no tau_sensor: no error figures)")
     return 0
 
 
 def cmd_diagnose(args) -> int:
     from hdjoint.jobs.diagnose import diagnose_to_directory
-    doc = diagnose_to_directory(args.recording, args.params, args.out, args.validate, args.time_unit)
-    from hdjoint.diagnosis.validation import summary_line
-    print(f"verdict: {doc['verdict']}")
-    for f in doc["findings"]:
-        fit = f["fit"]
-        print(f"  {f['effect']:<28} {f['where']['part']:<13} confidence {f['confidence']:.2f}  held-out RMS "
-              f"{fit['holdout_rms_before']:.4f} -> {fit['holdout_rms_after']:.4f} N.m")
-    for u in doc["unexplained"]:
-        print(f"  unexplained: {u['channel']} residual depends on {u['feature']} (largest at {u['largest_at']})")
-    for v in doc.get("validation", []):
-        print(f"  validation: {summary_line(v)}")
+    doc = diagnose_to_directory(args.recording, args.params, args.out, args.validate, args.time_unit,
+                                args.current_sign)
+    for line in diagnosis_lines(doc):
+        print(line)
     print(f"wrote {args.out}/findings.json, params.json, params.ssv, report.html ({doc['seconds']} s)")
     return 0
+
+
+def diagnosis_lines(doc: dict) -> list[str]:
+    """What `hdjoint diagnose` prints of its findings document."""
+    from hdjoint.diagnosis.validation import summary_line
+    lines = [f"verdict: {doc['verdict']}"]
+    lines += [f"  screening: {s['recording']}: {s['summary']}" for s in doc.get("screening", [])
+              if s["outliers_left_out"]]
+    for f in doc["findings"]:
+        fit = f["fit"]
+        lines.append(f"  {f['effect']:<28} {f['where']['part']:<13} confidence {f['confidence']:.2f}  held-out RMS "
+                     f"{fit['holdout_rms_before']:.4f} -> {fit['holdout_rms_after']:.4f} N.m")
+    for u in doc["unexplained"]:
+        where = f" (largest at {u['largest_at']})" if u.get("largest_at") not in (None, "", "-") else ""
+        lines.append(f"  unexplained: {u['channel']} residual depends on {u['feature']}{where}")
+    lines += [f"  validation: {summary_line(v)}" for v in doc.get("validation", [])]
+    return lines
 
 
 def cmd_demo(args) -> int:
@@ -79,10 +113,23 @@ def cmd_demo(args) -> int:
 def _time_unit_argument(p) -> None:
     p.add_argument("--time-unit", choices=tuple(TIME_UNITS),
                    help="unit of the recording's time column (default: seconds, refused when implausible)")
+    p.add_argument("--current-sign", type=int, choices=(1, -1), default=1,
+                   help="-1: the current i_m is logged against the encoders' positive sense (e.g. LARA8 joints 1 "
+                        "and 2); it is negated as it is read (default: 1)")
+
+
+def _seed(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be 0 or more, not {value}")
+    return value
 
 
 def build_parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="hdjoint", description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(prog="hdjoint", description=DESCRIPTION)
     sub = ap.add_subparsers(dest="command", required=True)
 
     p = sub.add_parser("fmus", help="write every FMU the project builds into a directory")
@@ -92,12 +139,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(run=cmd_fmus)
 
     p = sub.add_parser("simulate", help="run the joint FMU on a built-in experiment, write a recording")
-    p.add_argument("--experiment", default="paper", help="built-in experiment (default: paper)")
+    p.add_argument("--experiment", default="paper",
+                   help="built-in experiment: paper, paper_repeated, multisine, sweep or chirp (default: paper)")
     p.add_argument("--params", help="nominal parameter set (JSON) the controller assumes")
     p.add_argument("--joint", help="parameter set (JSON) of the simulated joint "
                                    "(default: the nominal set with realistic deviations)")
-    p.add_argument("--duration", type=float, help="seconds (default: the experiment's)")
-    p.add_argument("--seed", type=int, default=1, help="seed of the sensor noise")
+    p.add_argument("--duration", type=float,
+                   help=f"seconds, from {MIN_DURATION:g} to the experiment's length (default: the whole experiment)")
+    p.add_argument("--seed", type=_seed, default=1, help="seed of the sensor noise (an integer >= 0; default 1)")
     p.add_argument("-o", "--output", required=True, help="recording to write (CSV)")
     p.set_defaults(run=cmd_simulate)
 
@@ -142,19 +191,50 @@ def build_parser() -> argparse.ArgumentParser:
     return ap
 
 
+class Terminated(BaseException):
+    """SIGTERM, raised like a KeyboardInterrupt so every temporary file is removed on the way out."""
+
+
+_MAIN_PID = None  # the process that installed the handler; a forked worker dies of SIGTERM as usual
+
+
+def _terminate(signum, frame):
+    if os.getpid() != _MAIN_PID:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        os.kill(os.getpid(), signal.SIGTERM)
+        return
+    raise Terminated()
+
+
 def main(argv=None) -> int:
     try:
         args = build_parser().parse_args(argv)
     except SystemExit as e:  # argparse: --help (0) or a usage error (2), already printed
         return e.code
+    global _MAIN_PID
+    previous = None
+    try:
+        _MAIN_PID = os.getpid()
+        previous = signal.signal(signal.SIGTERM, _terminate)
+    except ValueError:  # not the main thread: the host handles its signals
+        pass
     try:
         return args.run(args)
-    except UserError as e:
+    except (UserError, OutputError) as e:
         print(f"hdjoint {args.command}: {e}", file=sys.stderr)
         return 2
     except (OSError, RuntimeError, ValueError) as e:
         print(f"hdjoint {args.command}: {e}", file=sys.stderr)
         return 1
+    except KeyboardInterrupt:  # one line, no traceback; the jobs' cleanups have run
+        print(f"hdjoint {args.command}: interrupted (SIGINT); no output was left half-written", file=sys.stderr)
+        return 128 + signal.SIGINT
+    except Terminated:
+        print(f"hdjoint {args.command}: terminated (SIGTERM); no output was left half-written", file=sys.stderr)
+        return 128 + signal.SIGTERM
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import signal
 import threading
 from typing import Callable, TypeVar
 
@@ -31,6 +32,12 @@ def _run(index: int):
     return _piece(index)
 
 
+def _quiet_on_ctrl_c() -> None:
+    """In a child: Ctrl-C (SIGINT to the whole process group) is the parent's to handle; the pool then
+    ends its children (without this, each printed a KeyboardInterrupt traceback)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def map_forked(piece: Callable[[int], T], count: int, workers: int | None = None) -> list[T]:
     """[piece(0), ..., piece(count - 1)], computed by up to `workers` forked
     processes (None: one per available core). Results come back pickled."""
@@ -40,7 +47,7 @@ def map_forked(piece: Callable[[int], T], count: int, workers: int | None = None
         return [piece(i) for i in range(count)]
     _piece = piece
     try:
-        with multiprocessing.get_context("fork").Pool(workers) as pool:
+        with multiprocessing.get_context("fork").Pool(workers, initializer=_quiet_on_ctrl_c) as pool:
             return pool.map(_run, range(count), chunksize=1)
     finally:
         _piece = None

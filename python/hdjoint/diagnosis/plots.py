@@ -4,6 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 
+# Where the two models agree the corrected curve lies on the nominal one: drawn dashed and thinner on top, so
+# the nominal curve still shows beneath it.
+NOMINAL_STYLE = {"color": "tab:red", "ls": "-", "lw": 2.0}
+CORRECTED_STYLE = {"color": "tab:blue", "ls": "--", "lw": 1.0}
+
 
 def residual_over_time(ax, t, before, after, segments, title):
     ax.plot(t, before, lw=0.4, color="tab:red", alpha=0.7, label="calibrated nominal model")
@@ -27,10 +32,11 @@ def residual_vs_feature(ax, x, before, after, xlabel, bins=30):
         return ax
     centres = 0.5 * (edges[1:] + edges[:-1])
     idx = np.clip(np.searchsorted(edges, x[ok], side="right") - 1, 0, len(edges) - 2)
-    for y, color, label in ((before[ok], "tab:red", "calibrated nominal"), (after[ok], "tab:blue", "corrected")):
+    for y, style, label in ((before[ok], NOMINAL_STYLE, "calibrated nominal"),
+                            (after[ok], CORRECTED_STYLE, "corrected")):
         mean = np.bincount(idx, weights=y, minlength=len(centres)) / np.maximum(
             np.bincount(idx, minlength=len(centres)), 1)
-        ax.plot(centres, mean, marker=".", color=color, label=label)
+        ax.plot(centres, mean, marker=".", label=label, **style)
     ax.axhline(0, color="k", lw=0.5)
     ax.set_xlabel(xlabel)
     ax.set_ylabel("mean residual (N.m)")
@@ -40,14 +46,14 @@ def residual_vs_feature(ax, x, before, after, xlabel, bins=30):
 
 def order_spectrum(ax, angle, before, after, orders, angle_name):
     """Amplitude of the residual at each order of an angle (least squares per order)."""
-    for y, color, label in ((before, "tab:red", "calibrated nominal"), (after, "tab:blue", "corrected")):
+    for y, style, label in ((before, NOMINAL_STYLE, "calibrated nominal"), (after, CORRECTED_STYLE, "corrected")):
         ok = np.isfinite(y)
         amps = []
         for k in orders:
             basis = np.column_stack([np.cos(k * angle[ok]), np.sin(k * angle[ok]), np.ones(ok.sum())])
             coef, *_ = np.linalg.lstsq(basis, y[ok], rcond=None)
             amps.append(np.hypot(coef[0], coef[1]))
-        ax.plot(orders, amps, marker="o", ms=3, color=color, label=label)
+        ax.plot(orders, amps, marker="o", ms=3, label=label, **style)
     ax.set_xlabel(f"order of {angle_name} (cycles per revolution)")
     ax.set_ylabel("amplitude (N.m)")
     ax.legend(fontsize=7)

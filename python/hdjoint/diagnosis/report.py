@@ -4,6 +4,7 @@ model added and the fit before and after."""
 from __future__ import annotations
 
 import html
+import re
 
 import matplotlib
 
@@ -45,6 +46,22 @@ def _fmt(x) -> str:
     return f"{x:.4g}" if isinstance(x, (int, float)) else str(x)
 
 
+def _meaning(name: str) -> tuple[str, str]:
+    """A parameter's unit and the first clause of its description (the parameter table's), or blanks."""
+    from hdjoint.io.parameters import table
+    info = table().get(name)
+    if info is None:
+        return "", ""
+    short = re.split(r"; |: | \(|, eq\.", info.description)[0]
+    return ("" if info.unit == "1" else info.unit), short
+
+
+def _fixed(x: float, digits: int = 2) -> str:
+    """X to DIGITS decimals, never '-0.00' (a negative number that rounds to zero reads as zero)."""
+    text = f"{x:.{digits}f}"
+    return text[1:] if text.startswith("-") and float(text) == 0.0 else text
+
+
 def _where_text(w: dict) -> str:
     """A finding's location in words (never a raw dict)."""
     regime = w["regime"] if isinstance(w["regime"], str) else ", ".join(
@@ -81,6 +98,8 @@ def _finding_line(f: dict) -> str:
     values = "; ".join(
         f"{html.escape(n)} = {_fmt(v)}" + (f" [{_fmt(intervals[n][0])}, {_fmt(intervals[n][1])}]"
                                           if intervals.get(n) else "")
+        + (f" {html.escape(_meaning(n)[0])}" if _meaning(n)[0] else "")
+        + (f" ({html.escape(_meaning(n)[1])})" if _meaning(n)[1] else "")
         for n, v in f["parameters"].items())
     caveat = f.get("in_the_estimator", {}).get("caveat")
     values += f". <i>Caveat: {html.escape(caveat)}</i>" if caveat else ""
@@ -101,6 +120,10 @@ def _summary(doc: dict) -> str:
     items.append("<p><b>Unexplained:</b> " + (html.escape("; ".join(
         f"{u['channel']} channel against {u['feature']} (held-out gain {u['held_out_gain']:.3g})"
         for u in doc["unexplained"])) if doc["unexplained"] else "nothing") + ".</p>")
+    if any(x["outliers_left_out"] for x in doc.get("screening", [])):  # hdjoint.io.screening
+        items.append("<p><b>Outliers left out:</b> " + html.escape("; ".join(
+            f"{x['recording'] or 'recording'}: {x['summary']}" for x in doc["screening"] if x["outliers_left_out"]))
+            + ".</p>")
     if doc.get("cannot_tell"):
         items.append("<p><b>This recording cannot tell:</b> " + html.escape("; ".join(
             f"{x.get('effect') or x['parameter']}: {x['why']}" for x in doc["cannot_tell"])) + ".</p>")
@@ -109,7 +132,11 @@ def _summary(doc: dict) -> str:
     in_a_set = {a["effect"] for f in doc["findings"] for a in f.get("alternatives") or []}
     advice += [f"To settle {x['effect']}, record {x['record']}." for x in doc.get("cannot_tell", [])
                if x.get("effect") and x["record"] and x["effect"] not in in_a_set]
-    advice += [f"To test {n['effect']}, record a motion that removes this: {n['reason']}." for n in doc["not_testable"]]
+    untested: dict[str, list[str]] = {}  # one sentence per reason, naming every effect it keeps untested
+    for n in doc["not_testable"]:
+        untested.setdefault(n["reason"].removeprefix("not testable on this recording: "), []).append(n["effect"])
+    advice += [f"To test {', '.join(effects)}, record a motion that removes this: {reason}."
+               for reason, effects in untested.items()]
     items.append("<p><b>What to record next:</b> " + (html.escape(" ".join(advice)) if advice
                                                       else "nothing needed to settle these findings") + "</p>")
     return "<section id='summary' class='summary'>" + "".join(items) + "</section>"
@@ -127,9 +154,9 @@ def _alignment_text(recording: dict) -> str:
     a = recording.get("current_alignment")
     if not a:
         return ""
-    return (f"; the current acting at each encoder sample is the one logged {-a['estimate'] * 1e3:.2f} ms before it "
-            f"(95 % interval {-a['hi'] * 1e3:.2f} to {-a['lo'] * 1e3:.2f} ms; "
-            f"{-a['bounds'][0] * 1e3:.2f} ms is a current held over each sample)")
+    return (f"; the current acting at each encoder sample is the one logged {_fixed(-a['estimate'] * 1e3)} ms before "
+            f"it (95 % interval {_fixed(-a['hi'] * 1e3)} to {_fixed(-a['lo'] * 1e3)} ms; "
+            f"{_fixed(-a['bounds'][0] * 1e3)} ms is a current held over each sample)")
 
 
 def _validation_section(entries: list[dict]) -> str:
@@ -258,12 +285,14 @@ def build(result, doc: dict) -> str:
     if doc.get("validation"):
         sections.append(_validation_section(doc["validation"]))
 
-    cal = [(n, _fmt(v["nominal"]), _fmt(v["estimate"]), f"[{_fmt(v['lo'])}, {_fmt(v['hi'])}]", _fmt(v["tolerance"]),
-            f"{v['z']:.2f}", "yes" if v["identified"] else "no") for n, v in doc["calibration"].items()]
+    cal = [(n, *_meaning(n), _fmt(v["nominal"]), _fmt(v["estimate"]), f"[{_fmt(v['lo'])}, {_fmt(v['hi'])}]",
+            _fmt(v["tolerance"]), _fixed(v['z']), "yes" if v["identified"] else "no")
+           for n, v in doc["calibration"].items()]
     sections.append("<h2>Calibration of the nominal parameters</h2><p>Maximum a posteriori, each parameter's "
                     "tolerance its prior; 95 % intervals from the Laplace approximation; z = (estimate - nominal) / "
                     "tolerance; identified: the recording narrows the prior by more than half.</p>" + _table(
-                        cal, ["parameter", "nominal", "estimate", "95 % interval", "tolerance", "z", "identified"]))
+                        cal, ["parameter", "unit", "meaning", "nominal", "estimate", "95 % interval", "tolerance", "z",
+                              "identified"]))
     if doc["unexplained"]:
         sections.append("<h2>Unexplained structure</h2>" + _table(
             [(u["channel"], u["feature"], u["held_out_gain"], u["largest_at"]) for u in doc["unexplained"]],

@@ -9,9 +9,10 @@ smoother on the whole recording in memory (_core.run_estimator(smooth=True))."""
 from __future__ import annotations
 
 import os
-import tempfile
 
 import numpy as np
+
+from hdjoint.io.outputs import temp_dir
 
 BACKWARD_BLOCK = 8192  # records read at a time (8 MB)
 SMOOTH_COLUMNS = ("tau_smooth", "tau_smooth_std")
@@ -26,7 +27,8 @@ class SmoothedRows:
         from hdjoint import _core
         self.params, self.outputs = params, list(outputs)
         self.record_values = _core.RECORD_VALUES
-        self._dir = tempfile.TemporaryDirectory(prefix="hdjoint-smooth-")
+        # Named with the pid: a run killed outright leaves it, and the next run removes it.
+        self._dir = temp_dir("hdjoint-smooth")
         self._rows = open(os.path.join(self._dir.name, "rows.f8"), "w+b")
         self._records = open(os.path.join(self._dir.name, "records.f8"), "w+b")
         # Per row: time, outputs, last_record (global), sensor (NaN without one).

@@ -38,6 +38,11 @@ def cmd_fleet(args) -> int:
                         allowed_failures=ALLOWED_FAILURES if args.allowed_failures is None else args.allowed_failures)
     print(f"{len(summary.rows)} recordings: {summary.computed} processed now, {summary.cached} done earlier, "
           f"{summary.failed} failed; wrote {summary.parquet} and {summary.html}")
+    if summary.rows and summary.failed == len(summary.rows):
+        first = next(r for r in summary.rows if r.get("status") != "ok")
+        print(f"hdjoint fleet: every recording failed ({summary.failed}); the first, {first['recording']}: "
+              f"{first.get('error')}", file=sys.stderr)
+        return 1
     from hdjoint.fleet.trend import rank_joints
     for d in rank_joints(summary.rows)[:5]:
         if d.drifting:
@@ -56,6 +61,17 @@ def cmd_generate(args) -> int:
     return 0
 
 
+def _positive_int(text: str) -> int:
+    import argparse
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, not {value}")
+    return value
+
+
 def register(sub) -> None:
     """Add `fleet` and its subcommands to the main parser's subparsers."""
     fleet = sub.add_parser("fleet", help="diagnose or estimate a fleet of recordings on Dask; fleet drift report")
@@ -70,7 +86,7 @@ def register(sub) -> None:
     p.set_defaults(run=cmd_fleet)
     p = fsub.add_parser("generate", help="simulate a fleet with known drifts (for trying the fleet commands)")
     p.add_argument("out", help="target directory")
-    p.add_argument("--joints", type=int, default=4)
-    p.add_argument("--days", type=int, default=6)
-    p.add_argument("--duration", type=float, default=20.0, help="seconds per recording")
+    p.add_argument("--joints", type=_positive_int, default=4, help="number of joints (default: 4)")
+    p.add_argument("--days", type=_positive_int, default=6, help="recordings per joint, one a day (default: 6)")
+    p.add_argument("--duration", type=float, default=20.0, help="seconds per recording (default: 20)")
     p.set_defaults(run=cmd_generate)

@@ -15,6 +15,7 @@ import hashlib
 import json
 import os
 import re
+import sys
 from dataclasses import dataclass, replace
 from datetime import datetime, timezone
 from pathlib import Path
@@ -107,14 +108,20 @@ def read_params_map(path: str | os.PathLike) -> ParamsMap:
     return ParamsMap(folder, tuple(entries))
 
 
-def find_recordings(patterns: list[str]) -> list[Path]:
+def find_recordings(patterns: list[str], exclude: Path | None = None) -> list[Path]:
+    """The files PATTERNS match, never one under EXCLUDE (the fleet's own
+    output folder: its estimates.csv files are not recordings)."""
     found = []
     for pattern in patterns:
         hits = sorted(glob.glob(pattern, recursive=True)) if glob.has_magic(pattern) else [pattern]
         found += [Path(h).resolve() for h in hits if Path(h).is_file()]
     unique = list(dict.fromkeys(found))
+    if exclude is not None:
+        exclude = Path(exclude).resolve()
+        unique = [p for p in unique if not p.is_relative_to(exclude)]
     if not unique:
-        raise UserError(f"no recordings match {' '.join(patterns)}")
+        outside = f" outside --out {exclude}" if exclude is not None else ""
+        raise UserError(f"no recordings match {' '.join(patterns)}{outside}")
     return unique
 
 
@@ -127,10 +134,12 @@ def _mtime_date(path: Path) -> str:
     return datetime.fromtimestamp(path.stat().st_mtime, timezone.utc).strftime("%Y-%m-%dT%H:%M:%S")
 
 
-def plan(patterns: list[str], params_map: str | None, joint_pattern: str | None) -> list[Job]:
-    """The jobs for every recording: its parameter file, joint id and date.
-    A recording no map pattern matches is a user error (named)."""
-    recordings = find_recordings(patterns)
+def plan(patterns: list[str], params_map: str | None, joint_pattern: str | None,
+         out: str | os.PathLike | None = None) -> list[Job]:
+    """The jobs for every recording (none under OUT, the fleet's outputs): its
+    parameter file, joint id and date. A recording no map pattern matches is
+    a user error (named); a map pattern that matches none is warned about."""
+    recordings = find_recordings(patterns, exclude=out)
     pmap = read_params_map(params_map) if params_map else None
     regex = None
     if joint_pattern:
@@ -162,4 +171,10 @@ def plan(patterns: list[str], params_map: str | None, joint_pattern: str | None)
             job = replace(job, name=f"{job.name}-{hashlib.sha256(job.recording.encode()).hexdigest()[:8]}")
         names.add((job.folder, job.name))
         jobs.append(job)
+    if pmap:
+        used = {pmap.match(rec)[0] for rec in recordings}
+        for pattern, _, _ in pmap.entries:
+            if pattern not in used:
+                print(f"warning: {params_map}: pattern '{pattern}' is used for none of the recordings",
+                      file=sys.stderr)
     return jobs

@@ -54,7 +54,10 @@ def _ranking(drifts) -> str:
             f"tested (Bonferroni). Drifting: p &lt; {trend.ALPHA} and a change over the period of at least the "
             f"parameter's tolerance (or {trend.RELEVANT_CHANGE:.0%} of its first value where none is stated), so "
             f"a joint without drift is flagged with probability at most {trend.ALPHA:.0%} (measured false-alarm "
-            f"rate: docs/fleet.md).</p>"
+            f"rate: docs/fleet.md). Ranking: drifting joints first, then each group by its p-value (smallest "
+            f"first); the effect and quantity shown are those of the joint's smallest p-value, so a joint that is "
+            f"not drifting may show a large change that is not significant, or a significant one below its "
+            f"tolerance.</p>"
             + _html_table(("rank", "joint", "drift p", "drifting", "effect", "quantity", "direction",
                            "change over the period (%)", "slope per day", "quantities tested"), body, marked))
 
@@ -76,12 +79,13 @@ def _joint_figure(joint: str, joint_rows: list[dict], drift) -> str:
         err = np.where(np.isfinite(lo) & np.isfinite(hi), np.vstack([y - lo, hi - y]), 0.0)
         colour = "tab:red" if drift.strongest and name == drift.strongest.quantity and drift.drifting else "tab:blue"
         ax.errorbar(x, y, yerr=err, fmt="o-", color=colour, capsize=3, ms=4)
-        ax.set_title(labels[name], fontsize=9)
+        ax.set_title(labels[name], fontsize=9, parse_math=False)
         ax.set_xlabel("days", fontsize=8)
         ax.tick_params(labelsize=7)
     for ax in list(axes.flat)[len(shown):]:
         ax.axis("off")
-    fig.suptitle(f"joint {joint}: calibrated values and 95 % intervals over time", fontsize=10)
+    # parse_math=False: a joint id is the user's text ("$x$" is no formula to typeset).
+    fig.suptitle(f"joint {joint}: calibrated values and 95 % intervals over time", fontsize=10, parse_math=False)
     uri = to_data_uri(fig)
     return f'<figure><img src="{uri}" alt="joint {html.escape(joint)} parameters over time"></figure>'
 
@@ -125,7 +129,7 @@ def build(found: list[dict]) -> str:
     by_joint: dict[str, list[dict]] = {}
     for r in found:
         by_joint.setdefault(str(r.get("joint")), []).append(r)
-    commands = sorted({str(r.get("command")) for r in found})
+    commands = sorted({html.escape(str(r.get("command"))) for r in found})
     ok = sum(r.get("status") == "ok" for r in found)
     sections = [f"<h1>Fleet report</h1><p>{len(found)} recordings of {len(by_joint)} joints ({', '.join(commands)}): "
                 f"{ok} done, {len(found) - ok} failed. Written "

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import importlib.util
 import os
+import re
 import sys
 import time
 from dataclasses import dataclass, field
@@ -14,6 +15,9 @@ from pathlib import Path
 
 from hdjoint.fleet import rows, store, tasks
 from hdjoint.fleet.inputs import Job, plan
+from hdjoint.jobs.inputs import UserError, check_output_directory, locked_output
+
+FLEET_FILES = ("fleet.parquet", "fleet.html")
 
 # How often the scheduler may lose a worker while it runs one recording
 # before that recording is marked failed (Dask's allowed-failures).
@@ -72,13 +76,30 @@ def has_dashboard() -> bool:
     return importlib.util.find_spec("bokeh") is not None
 
 
+# A scheduler address: PROTOCOL://HOST:PORT, or HOST:PORT (tcp).
+_ADDRESS = re.compile(r"\A(?:(?:tcp|tls|ucx|ws|wss)://)?(?:\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._-]+):\d{1,5}\Z")
+CONNECT_TIMEOUT = "10s"
+
+
+def check_scheduler(scheduler: str) -> None:
+    """Refuse an address that cannot be a Dask scheduler's, before connecting."""
+    if not _ADDRESS.match(scheduler):
+        raise UserError(f"--scheduler {scheduler!r}: not a scheduler address (expected tcp://HOST:PORT or "
+                        "tls://HOST:PORT)")
+
+
 def connect(scheduler: str | None, workers: int | None, allowed_failures: int):
     """A Client: to the scheduler at ADDR, or to a new LocalCluster."""
     import dask
     from distributed import Client, LocalCluster
     if scheduler:
+        check_scheduler(scheduler)
         # The scheduler's own configuration sets its allowed-failures there.
-        return Client(scheduler)
+        try:
+            return Client(scheduler, timeout=CONNECT_TIMEOUT)
+        except Exception as e:  # noqa: BLE001 - a refused port, a timeout, or garbage read as a message length
+            reason = str(e).splitlines()[0] if str(e) else type(e).__name__
+            raise UserError(f"--scheduler {scheduler}: no Dask scheduler answered there ({reason[:200]})") from None
     with dask.config.set({"distributed.scheduler.allowed-failures": allowed_failures}):
         # ":0": any free port, so two fleets on one machine do not contend for 8787.
         cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
@@ -121,7 +142,17 @@ def run_fleet(command: str, patterns: list[str], out: str | os.PathLike, params_
     found under OUT from an earlier run (same contents, same command) are reused."""
     options = dict(options or {})
     out = str(Path(out).resolve())
-    jobs = plan(patterns, params_map, joint_pattern)
+    check_output_directory(out, FLEET_FILES)  # a file, an unwritable place: before any work
+    if scheduler:
+        check_scheduler(scheduler)
+    jobs = plan(patterns, params_map, joint_pattern, out=out)
+    with locked_output(out):
+        return _run_locked(command, jobs, out, scheduler, workers, options, client, allowed_failures,
+                           show_progress, write_report)
+
+
+def _run_locked(command, jobs, out, scheduler, workers, options, client, allowed_failures, show_progress,
+                write_report) -> Summary:
     keys = [store.result_key(command, j.recording, j.params, options) for j in jobs]
     summary = Summary()
     todo = []

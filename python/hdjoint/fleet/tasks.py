@@ -25,36 +25,18 @@ def output_dir(out: str, job: Job) -> Path:
     return Path(out) / job.folder / job.name
 
 
-def _estimator_params(job: Job, rec) -> dict:
-    """The estimator's parameter set; Ts from the recording unless the file sets it."""
-    from hdjoint.io import parameters
-    from hdjoint.jobs.inputs import read_params
-    from hdjoint.io.timebase import given_ts, sample_period
-    params = read_params(job.params)
-    params["Ts"] = sample_period(rec.median_step, given_ts(job.params))
-    return parameters.for_estimator(params)
-
-
 def estimate(job: Job, out: Path, engine: str) -> dict:
-    """Torque estimates into out/estimates.csv; error figures against the sensor."""
-    from hdjoint.jobs.inputs import read_recording
-    from hdjoint.estimation.metrics import error_figures
-    from hdjoint.io.recording import write_csv
-    rec = read_recording(job.recording)
-    params = _estimator_params(job, rec)
-    if engine == "fmu":
-        from hdjoint.fmu.runner import run_estimator_fmu
-        est = run_estimator_fmu(rec.time, rec.i_m, rec.theta_m, rec.theta_l, params)
-    else:
-        from hdjoint import _core
-        est = _core.run_estimator(params, rec.time, rec.i_m, rec.theta_m, rec.theta_l)
+    """Torque estimates into out/estimates.csv through the single-recording
+    job (one reading path: the same time-base checks, gaps and jitter refused,
+    Ts checked against the parameter file); error figures against the sensor."""
+    from hdjoint.jobs.estimate import Options, estimate_to_file
     out.mkdir(parents=True, exist_ok=True)
-    write_csv(out / "estimates.csv", {"time": rec.time, **{k: est[k] for k in ESTIMATES}})
+    figures = estimate_to_file(Options(recording=job.recording, output=str(out / "estimates.csv"),
+                                       params=job.params, engine=engine))
     row = {}
-    if rec.tau_sensor is not None:
-        for name in ESTIMATES:
-            fig = error_figures(est[name], rec.tau_sensor)
-            row[f"est.{name}.rms"], row[f"est.{name}.max"] = fig.rms, fig.max
+    for name in ESTIMATES:
+        if name in figures:
+            row[f"est.{name}.rms"], row[f"est.{name}.max"] = figures[name].rms, figures[name].max
     return row
 
 

@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import ctypes
 import itertools
+import os
 import shutil
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +23,7 @@ from fmpy import calloc, free
 
 from hdjoint import _core
 from hdjoint.fmu.shipped import fmu_path
+from hdjoint.io.outputs import sweep_temp_dirs
 
 
 def _signal_names(model: str, kind: str) -> tuple[str, ...]:
@@ -68,7 +71,15 @@ class FmuInstance:
         self.description = read_model_description(str(self.path))
         self.variables = {v.name: v for v in self.description.modelVariables}
         # Only what running needs: the FMU also carries its sources (with Eigen).
-        self._unzipdir = extract(str(self.path), include=lambda name: not name.startswith("sources/"))
+        # Into a folder named with the pid: a run killed outright leaves it, and the next run removes it.
+        sweep_temp_dirs("hdjoint-fmu")
+        unzipdir = tempfile.mkdtemp(prefix=f"hdjoint-fmu-{os.getpid()}-")
+        try:
+            self._unzipdir = extract(str(self.path), unzipdir=unzipdir,
+                                     include=lambda name: not name.startswith("sources/"))
+        except OSError as e:  # a full temporary folder
+            shutil.rmtree(unzipdir, ignore_errors=True)
+            raise OSError(e.errno, f"cannot unpack {self.path.name} into {unzipdir} (TMPDIR): {e.strerror}") from None
         self.messages: list[tuple[str, str]] = []  # (status, message)
         self._environment = next(_ENVIRONMENTS)
         _MESSAGES[self._environment] = self.messages

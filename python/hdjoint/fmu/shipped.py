@@ -35,13 +35,20 @@ def fmu_path(name: str, fmi: int = 2) -> Path:
 
 
 def export_fmus(out_dir: str | Path, fmi: tuple[int, ...] = FMI_VERSIONS) -> list[Path]:
-    """Copy every FMU of the FMI versions `fmi` into out_dir; returns the written paths."""
+    """Copy every FMU of the FMI versions `fmi` into out_dir (each through a
+    temporary file, never over a device node, a FIFO or a read-only file);
+    returns the written paths."""
+    from hdjoint.io.outputs import check_replaceable, replace_into, temp_path
     out = Path(out_dir)
+    pairs = [(name, version, out / fmu_file_name(name, version)) for version in fmi for name in FMU_NAMES]
+    for _, _, target in pairs:
+        check_replaceable(target)  # before anything is written
     out.mkdir(parents=True, exist_ok=True)
-    written = []
-    for version in fmi:
-        for name in FMU_NAMES:
-            target = out / fmu_file_name(name, version)
-            shutil.copyfile(fmu_path(name, version), target)
-            written.append(target)
-    return written
+    for name, version, target in pairs:
+        tmp = temp_path(target)
+        try:
+            shutil.copyfile(fmu_path(name, version), tmp)
+            replace_into(tmp, target)
+        finally:
+            Path(tmp).unlink(missing_ok=True)
+    return [target for _, _, target in pairs]

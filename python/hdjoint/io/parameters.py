@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import tempfile
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -125,7 +124,10 @@ def check(params: dict, source: str = "parameter set") -> dict[str, float]:
             raise ParameterError(f"{source}: unknown parameter '{name}'")
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ParameterError(f"{source}: parameter '{name}' must be a number, not {value!r}")
-        value = float(value)
+        try:
+            value = float(value)
+        except OverflowError:
+            raise ParameterError(f"{source}: parameter '{name}' is too large a number") from None
         p = info[name]
         if not math.isfinite(value) or not p.min <= value <= p.max:
             raise ParameterError(
@@ -142,18 +144,40 @@ def check(params: dict, source: str = "parameter set") -> dict[str, float]:
 TOLERANCE_KEY = "tolerance"
 
 
+def _no_duplicates(pairs):
+    seen = {}
+    for key, value in pairs:
+        if key in seen:
+            raise ParameterError(f"'{key}' is given twice")
+        seen[key] = value
+    return seen
+
+
 def _read_json(path) -> dict:
     try:
-        text = Path(path).read_text()
+        # utf-8-sig: a byte-order mark is tolerated, as in a recording.
+        text = Path(path).read_bytes().decode("utf-8-sig")
     except OSError as e:
         raise ParameterError(f"{path}: cannot read the parameter file ({e.strerror})") from None
+    except UnicodeDecodeError as e:
+        raise ParameterError(f"{path}: not UTF-8 text ({e.reason} at byte {e.start})") from None
     try:
-        data = json.loads(text)
+        data = json.loads(text, object_pairs_hook=_no_duplicates)
     except json.JSONDecodeError as e:
         raise ParameterError(f"{path}: line {e.lineno}, column {e.colno}: not valid JSON ({e.msg})") from None
+    except ParameterError as e:
+        raise ParameterError(f"{path}: {e} (a parameter is set once)") from None
+    except RecursionError:
+        raise ParameterError(f"{path}: nested too deeply; a parameter file is one object of name: number") from None
+    except ValueError as e:  # e.g. an integer of thousands of digits
+        raise ParameterError(f"{path}: not a usable JSON number ({str(e).split(';')[0]})") from None
     if not isinstance(data, dict):
         raise ParameterError(f"{path}: expected a JSON object of name: value")
     return data
+
+
+# A relative tolerance the diagnosis can use: from one part in a million to ten times the nominal value.
+TOLERANCE_RANGE = (1e-6, 10.0)
 
 
 def check_tolerances(overrides, source: str = "parameter set") -> dict[str, float]:
@@ -167,8 +191,9 @@ def check_tolerances(overrides, source: str = "parameter set") -> dict[str, floa
             raise ParameterError(f"{source}: '{TOLERANCE_KEY}' names an unknown parameter '{name}'")
         if not info[name].calibrated():
             raise ParameterError(f"{source}: '{TOLERANCE_KEY}' names '{name}', which the diagnosis never calibrates")
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
-            raise ParameterError(f"{source}: tolerance of '{name}' must be a positive number "
+        lo, hi = TOLERANCE_RANGE
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not lo <= value <= hi:  # NaN fails too
+            raise ParameterError(f"{source}: tolerance of '{name}' must be a positive number from {lo:g} to {hi:g} "
                                  f"(a fraction of the nominal value, 0.1 for +-10 %), not {value!r}")
         checked[name] = float(value)
     return checked
@@ -194,15 +219,16 @@ def load_tolerances(path: str | os.PathLike | None) -> dict[str, float]:
 
 
 def _atomic_write(path: str | os.PathLike, text: str) -> None:
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    from hdjoint.io.outputs import check_replaceable, replace_into, temp_path, write_error
+    check_replaceable(path)  # never over a device node, a FIFO or a read-only file
+    tmp = temp_path(path)
     try:
-        with os.fdopen(fd, "w") as f:
+        with open(tmp, "x", encoding="utf-8") as f:
             f.write(text)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; a parameter file is an ordinary file
-        os.replace(tmp, path)
+        replace_into(tmp, path)  # an existing file keeps its mode; a new one as the umask says
+    except OSError as e:
+        Path(tmp).unlink(missing_ok=True)
+        raise write_error(path, e) from None
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise

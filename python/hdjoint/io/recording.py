@@ -15,12 +15,13 @@ import csv
 import itertools
 import math
 import os
-import secrets
 import warnings
 from dataclasses import dataclass, field
 from typing import Iterable, Iterator, Mapping, Sequence
 
 import numpy as np
+
+from hdjoint.io.outputs import check_replaceable, replace_into, sweep_debris, temp_path, write_error
 
 REQUIRED_COLUMNS = ("time", "i_m", "theta_m", "theta_l")
 OPTIONAL_COLUMNS = ("tau_sensor",)
@@ -437,14 +438,14 @@ class CsvWriter:
     def __init__(self, path, names: Sequence[str]):
         self.path = os.fspath(path)
         self.names = list(names)
-        directory = os.path.dirname(os.path.abspath(self.path))
-        self._tmp = os.path.join(directory, f".{os.path.basename(self.path)}.{secrets.token_hex(6)}.tmp")
+        sweep_debris(self.path)  # what a run killed outright (SIGKILL) left behind
+        self._tmp = temp_path(self.path)
         try:
             # O_EXCL: never clobber a stranger's file; 0o666 lets the umask
             # decide the final permissions, as for a normally created file.
             fd = os.open(self._tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
         except OSError as exc:
-            raise OSError(exc.errno, f"cannot write {self.path}: {exc.strerror or exc}") from None
+            raise write_error(self.path, exc) from None
         self._file = open(fd, "w", newline="", encoding="utf-8")
         self._writer = csv.writer(self._file, lineterminator="\n")
         self._guard(self._writer.writerow, self.names)
@@ -454,7 +455,7 @@ class CsvWriter:
             return fn(*args)
         except OSError as exc:
             self.discard()
-            raise OSError(exc.errno, f"cannot write {self.path}: {exc.strerror or exc}") from None
+            raise write_error(self.path, exc) from None
 
     def write(self, columns: Mapping[str, Iterable]) -> None:
         """Append rows: every name of the header, equal lengths."""
@@ -471,11 +472,19 @@ class CsvWriter:
             self._file.flush()
             os.fsync(self._file.fileno())
             self._file.close()
-            os.replace(self._tmp, self.path)
-        self._guard(finish)
+            check_replaceable(self.path)  # again: it may have changed while we computed
+            replace_into(self._tmp, self.path)  # an existing file keeps its mode
+        try:
+            self._guard(finish)
+        except ValueError:
+            self.discard()
+            raise
 
     def discard(self) -> None:
-        self._file.close()
+        try:
+            self._file.close()  # flushes: on a full disk this fails too, and the file goes all the same
+        except OSError:
+            pass
         try:
             os.unlink(self._tmp)
         except FileNotFoundError:

@@ -29,7 +29,7 @@ def given_ts(params_path) -> float | None:
     """The sample period the parameter file sets, or None when it leaves Ts open."""
     if not params_path:
         return None
-    given = json.loads(Path(params_path).read_text())  # read_params has validated it
+    given = json.loads(Path(params_path).read_bytes().decode("utf-8-sig"))  # read_params has validated it
     return float(given["Ts"]) if "Ts" in given else None
 
 
@@ -54,8 +54,16 @@ def likely_unit(step: float) -> str | None:
 def check_step(where: str, step: float, unit: str | None, ts: float | None = None) -> None:
     """Refuse a median STEP (already in seconds) that is implausible or
     disagrees with the parameters' TS. UNIT is what the user declared (None:
-    nothing, seconds assumed); a declared unit is trusted for plausibility."""
+    nothing, seconds assumed); a declared unit must give a plausible step too."""
     lo, hi = PLAUSIBLE_STEP
+    if unit is not None and not lo <= step <= hi:
+        raw = step / TIME_UNITS[unit]  # the step as the file writes it
+        guess = next((u for u in TIME_UNITS if u != unit and lo <= raw * TIME_UNITS[u] <= hi), None)
+        hint = (f"the time column looks like {_UNIT_NAMES[guess]}: "
+                + ("leave --time-unit out" if guess == "s" else f"pass --time-unit {guess}") if guess
+                else "check the time column's unit")
+        raise TimeBaseError(f"{where}: with --time-unit {unit} the median time step is {step:.6g} s, implausible "
+                            f"for a joint recording (expected {lo:g} to {hi:g} s); {hint}")
     if unit is None and not lo <= step <= hi:
         guess = likely_unit(step)
         hint = (f"the time column looks like {_UNIT_NAMES[guess]}: pass --time-unit {guess}" if guess

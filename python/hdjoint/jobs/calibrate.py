@@ -13,7 +13,6 @@ estimated, against the motor's current-based torque."""
 from __future__ import annotations
 
 import json
-import os
 import sys
 import tempfile
 from dataclasses import dataclass, replace
@@ -25,7 +24,9 @@ from hdjoint.diagnosis.part_torques import Prepared
 from hdjoint.diagnosis.pipeline import diagnose
 from hdjoint.diagnosis.prepare import DiagnosisError, check_recording, place_offset
 from hdjoint.io import parameters
+from hdjoint.io.outputs import check_replaceable, replace_into
 from hdjoint.io.recording import Recording
+from hdjoint.jobs.diagnose import screened_recordings
 from hdjoint.jobs.inputs import UserError, check_output_file, read_params, read_recording
 
 
@@ -50,9 +51,11 @@ def _progress(message: str) -> None:
     print(f"[calibrate] {message}", file=sys.stderr, flush=True)
 
 
-def calibrate_from(paths: list[str], params_path: str | None, time_unit: str | None = None) -> CalibratedSet:
-    """Calibrate the joint of PARAMS_PATH (None: the defaults) on the recordings at PATHS."""
-    recs = [read_recording(path, time_unit) for path in paths]
+def calibrate_from(paths: list[str], params_path: str | None, time_unit: str | None = None,
+                   current_sign: float = 1.0) -> CalibratedSet:
+    """Calibrate the joint of PARAMS_PATH (None: the defaults) on the recordings at PATHS
+    (screened for wild samples and degenerate channels, as `hdjoint diagnose` screens them)."""
+    recs, _ = screened_recordings([read_recording(path, time_unit, current_sign) for path in paths])
     nominal = read_params(params_path)
     try:
         tolerance = parameters.load_tolerances(params_path)
@@ -97,14 +100,15 @@ def estimate_calibrated(opts, calibrate_paths: list[str]) -> dict:
     check_output_file(opts.output, inputs=(opts.recording, opts.params, *calibrate_paths))
     for side in (params_file, document_file):
         check_output_file(side, inputs=(opts.recording, opts.params, *calibrate_paths))
-    calibrated = calibrate_from(calibrate_paths, opts.params, opts.time_unit)
-    run = placed_on(read_recording(opts.recording, opts.time_unit), calibrated.params)
+    calibrated = calibrate_from(calibrate_paths, opts.params, opts.time_unit, opts.current_sign)
+    run = placed_on(read_recording(opts.recording, opts.time_unit, opts.current_sign), calibrated.params)
     with tempfile.TemporaryDirectory(dir=Path(opts.output).absolute().parent) as tmp:
         stage = Path(tmp)
         parameters.save(stage / "params.json", run)
         (stage / "calibration.json").write_text(json.dumps(calibrated.document(calibrate_paths), indent=2) + "\n")
         figures = estimate_to_file(replace(opts, params=str(stage / "params.json"), output=str(stage / "estimates")))
-        os.replace(stage / "params.json", params_file)
-        os.replace(stage / "calibration.json", document_file)
-        os.replace(stage / "estimates", opts.output)
+        for staged, target in ((stage / "params.json", params_file), (stage / "calibration.json", document_file),
+                               (stage / "estimates", Path(opts.output))):
+            check_replaceable(target)
+            replace_into(staged, target)
     return figures

@@ -13,8 +13,9 @@ import numpy as np
 
 from hdjoint.estimation.engines import BothEngines, CoreEngine, FmuEngine, RowFeeder
 from hdjoint.estimation.smoother import SMOOTH_COLUMNS, SmoothedRows
-from hdjoint.jobs.inputs import UserError, check_output_file, read_params
+from hdjoint.jobs.inputs import UserError, check_output_file, locked_output, read_params
 from hdjoint.estimation.metrics import RunningErrorFigures
+from hdjoint.io.screening import Degenerate, check_no_wrap, find_outliers
 from hdjoint.io.recording import CHUNK_ROWS, CsvWriter, Recording, RecordingError, iter_recording
 from hdjoint.io.timebase import (TIME_UNITS, TimeBaseError, check_step, describe, given_ts, irregular_steps,
     sample_period)
@@ -32,6 +33,7 @@ class Options:
     time_unit: str | None = None
     split_gaps: bool = False
     allow_jitter: bool = False
+    current_sign: float = 1.0  # -1: the current is logged against the encoders' sense
     block_rows: int = CHUNK_ROWS  # rows read, estimated and written at a time
 
 
@@ -58,11 +60,13 @@ class TimedBlocks:
         self.ts = sample_period(self.step, ts_given)
         self._guard(check_step, opts.recording, self.step, opts.time_unit, self.ts)
         self.gaps: list[str] = []
+        self._angles = None  # the last row's angles, for a wrap across blocks
+        self.wild: list[tuple[str, int, float]] = []  # (column, line, value) of wild samples (io.screening)
 
     def _guard(self, fn, *args):
         try:
             return fn(*args)
-        except (RecordingError, TimeBaseError) as e:
+        except (RecordingError, TimeBaseError, Degenerate) as e:
             raise UserError(str(e)) from None
 
     def _read(self):
@@ -73,6 +77,7 @@ class TimedBlocks:
             if chunk is None:
                 return
             chunk.recording.time = chunk.recording.time * factor
+            chunk.recording.i_m = chunk.recording.i_m * self.opts.current_sign
             yield chunk
 
     def __iter__(self):
@@ -93,6 +98,11 @@ class TimedBlocks:
                     hint = "--split-gaps" if bad.kind == "gap" else "--allow-jitter"
                     raise UserError(f"{self.opts.recording}: {text}; the estimator assumes a fixed sample period "
                                     f"(pass {hint} to accept it, see docs/robustness.md)")
+            self._guard(check_no_wrap, rec, chunk.lines, self._angles)
+            for name in ("i_m", "theta_m", "theta_l"):
+                x = getattr(rec, name)
+                self.wild += [(name, int(chunk.lines[k]), float(x[k])) for k in find_outliers(x, rec.time)]
+            self._angles = {"theta_m": float(rec.theta_m[-1]), "theta_l": float(rec.theta_l[-1])}
             previous = (float(rec.time[-1]), int(chunk.lines[-1]))
             yield Block(rec, cuts)
 
@@ -112,8 +122,13 @@ def _pieces(n: int, cuts: list[int]):
 def estimate_to_file(opts: Options) -> dict:
     """Run the estimator over OPTS.recording into OPTS.output; returns
     {estimate name: ErrorFigures against tau_sensor} (empty without a sensor)."""
-    from hdjoint.io import parameters
     check_output_file(opts.output, inputs=(opts.recording, opts.params))  # before any work
+    with locked_output(opts.output):
+        return _estimate_locked(opts)
+
+
+def _estimate_locked(opts: Options) -> dict:
+    from hdjoint.io import parameters
     params = read_params(opts.params)
     blocks = TimedBlocks(opts, given_ts(opts.params))
     ts_from_recording = given_ts(opts.params) is None
@@ -124,6 +139,12 @@ def estimate_to_file(opts: Options) -> dict:
         figures = _estimate(opts, blocks, params)
     except RuntimeError as e:  # FmuError, or the batch path's invalid input
         raise UserError(f"{opts.recording}: {e}") from None
+    if blocks.wild:
+        shown = ", ".join(f"line {line} {name} = {value:.4g}" for name, line, value in blocks.wild[:5])
+        more = f" and {len(blocks.wild) - 5} more" if len(blocks.wild) > 5 else ""
+        print(f"warning: {opts.recording}: {len(blocks.wild)} wild sample{'s' if len(blocks.wild) > 1 else ''} "
+              f"({shown}{more}): the estimates around them are unreliable (hdjoint diagnose leaves such samples "
+              "out)", file=sys.stderr)
     if ts_from_recording and abs(blocks.ts - 1e-3) > 1e-9:
         print(f"note: estimator sample period Ts = {blocks.ts:g} s (the recording's median step)", file=sys.stderr)
     return figures

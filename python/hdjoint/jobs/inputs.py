@@ -3,8 +3,11 @@ recordings and parameter files with errors that name the file, and refusing
 outputs that would overwrite an input or cannot be written."""
 from __future__ import annotations
 
+import contextlib
 import os
 from pathlib import Path
+
+from hdjoint.io.outputs import OutputError, OutputLock, check_replaceable
 
 
 class UserError(Exception):
@@ -19,14 +22,16 @@ def read_params(path):
         raise UserError(str(e)) from None
 
 
-def read_recording(path, time_unit: str | None = None):
+def read_recording(path, time_unit: str | None = None, current_sign: float = 1.0):
     """The whole recording, its time column converted to seconds from TIME_UNIT
-    (None: seconds, with the unit checked for plausibility)."""
+    (None: seconds, with the unit checked for plausibility), its current
+    multiplied by CURRENT_SIGN (-1: a current logged against the encoders' sense)."""
     from hdjoint.io.recording import RecordingError, read_recording as read
     from hdjoint.io.timebase import TIME_UNITS, TimeBaseError, check_step
     try:
         rec = read(path)
         rec.time = rec.time * TIME_UNITS[time_unit or "s"]
+        rec.i_m = rec.i_m * current_sign
         check_step(str(path), rec.median_step, time_unit)
     except (RecordingError, TimeBaseError) as e:
         raise UserError(str(e)) from None
@@ -50,6 +55,28 @@ def check_output_file(path, inputs=()) -> None:
     if out.is_dir():
         raise UserError(f"{path}: is a directory; the output must name a file")
     _check_writable_directory(path, out.absolute().parent)
+    _replaceable(out)
+
+
+def _replaceable(path: Path) -> None:
+    try:
+        check_replaceable(path)  # a device node, a FIFO, a read-only file: never replaced
+    except OutputError as e:
+        raise UserError(str(e)) from None
+
+
+@contextlib.contextmanager
+def locked_output(path):
+    """Hold the output PATH (a file or a folder) for the length of a run: a
+    second run on the same output is refused (exit 2) instead of racing."""
+    try:
+        lock = OutputLock(path).acquire()
+    except OutputError as e:
+        raise UserError(str(e)) from None
+    try:
+        yield lock
+    finally:
+        lock.release()
 
 
 def _check_writable_directory(path, directory: Path) -> None:
@@ -71,6 +98,7 @@ def check_output_directory(out, names, inputs=()) -> None:
         target = out / name
         if target.is_dir():
             raise UserError(f"{target}: is a directory, where the file {name} would be written")
+        _replaceable(target)
         for given in inputs:
             if given is not None and _same_file(target, Path(given)):
                 raise UserError(f"{target}: is the input {given}; refusing to write over it")

@@ -1,0 +1,215 @@
+"""Where outputs go, and how they get there safely: only over a regular,
+writable file (never a device node, a FIFO or a read-only file); through a
+temporary file next to the target, named with the writer's process id, that
+replaces the target in one step with the target's own mode; under a lock, so
+two runs never write the same output at once; and with the debris of a run
+that was killed outright (SIGKILL) removed by the next run. docs/robustness.md."""
+from __future__ import annotations
+
+import errno
+import fcntl
+import os
+import re
+import secrets
+import shutil
+import stat
+import tempfile
+from pathlib import Path
+
+
+class OutputError(ValueError):
+    """An output location that must not or cannot be written (exit code 2 at the command line)."""
+
+
+def _kind(mode: int) -> str:
+    for test, name in ((stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+                       (stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISSOCK, "a socket"),
+                       (stat.S_ISDIR, "a directory")):
+        if test(mode):
+            return name
+    return "not a regular file"
+
+
+def check_replaceable(path) -> None:
+    """Refuse PATH when it exists and is anything but a writable regular file:
+    a device node or a FIFO is never replaced by a file, a read-only file is
+    never replaced (its mode says not to, also to root)."""
+    try:
+        st = os.stat(path)  # follows a symlink: what the user would be writing over
+    except FileNotFoundError:
+        return
+    except OSError as e:
+        raise OutputError(f"{path}: cannot inspect the output ({e.strerror})") from None
+    if not stat.S_ISREG(st.st_mode):
+        raise OutputError(f"{path}: is {_kind(st.st_mode)}; outputs are written only as regular files "
+                          "(choose a file name)")
+    if not st.st_mode & 0o222 or not os.access(path, os.W_OK):
+        raise OutputError(f"{path}: is read-only (mode {stat.S_IMODE(st.st_mode):04o}); refusing to replace it "
+                          "(make it writable or choose another output)")
+
+
+def file_mode(path, default: int | None = None) -> int:
+    """The permission bits PATH's replacement gets: PATH's own when it exists,
+    else DEFAULT (None: 0o666 less the umask, as for a new file)."""
+    try:
+        return stat.S_IMODE(os.stat(path).st_mode)
+    except OSError:
+        if default is not None:
+            return default
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
+
+
+# Temporary names carry the writer's pid, so a later run can tell a dead run's debris from a live run's files.
+def temp_path(path) -> str:
+    """A temporary file name next to PATH: .NAME.PID.HEX.tmp."""
+    path = os.fspath(path)
+    directory, name = os.path.split(os.path.abspath(path))
+    return os.path.join(directory, f".{name}.{os.getpid()}.{secrets.token_hex(6)}.tmp")
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def sweep_debris(path) -> list[str]:
+    """Remove what a killed run left next to PATH (its temporary files and
+    staging folders, whose writer's pid is no longer running); returns them."""
+    path = os.path.abspath(os.fspath(path))
+    directory, name = os.path.split(path)
+    pattern = re.compile(rf"\.{re.escape(name)}\.(\d+)\.[0-9a-f]+\.tmp\Z")
+    removed = []
+    try:
+        entries = os.listdir(directory)
+    except OSError:
+        return removed
+    for entry in entries:
+        m = pattern.match(entry)
+        if m and not _alive(int(m.group(1))):
+            _remove(os.path.join(directory, entry))
+            removed.append(entry)
+    return removed
+
+
+def sweep_temp_dirs(prefix: str, directory: str | None = None) -> list[str]:
+    """Remove folders PREFIX-PID-* in DIRECTORY (default: the temporary
+    directory) whose pid is no longer running: what a killed run left."""
+    directory = directory or tempfile.gettempdir()
+    pattern = re.compile(rf"{re.escape(prefix)}-(\d+)-")
+    removed = []
+    try:
+        entries = os.listdir(directory)
+    except OSError:
+        return removed
+    for entry in entries:
+        m = pattern.match(entry)
+        if m and not _alive(int(m.group(1))):
+            _remove(os.path.join(directory, entry))
+            removed.append(entry)
+    return removed
+
+
+def temp_dir(prefix: str, directory: str | None = None) -> tempfile.TemporaryDirectory:
+    """A TemporaryDirectory named PREFIX-PID-..., swept by sweep_temp_dirs once its run is dead."""
+    sweep_temp_dirs(prefix, directory)
+    return tempfile.TemporaryDirectory(prefix=f"{prefix}-{os.getpid()}-", dir=directory)
+
+
+def _remove(path: str) -> None:
+    try:
+        if os.path.isdir(path) and not os.path.islink(path):
+            shutil.rmtree(path, ignore_errors=True)
+        else:
+            os.unlink(path)
+    except OSError:
+        pass
+
+
+def replace_into(tmp, path) -> None:
+    """Move the finished TMP over PATH in one step, with PATH's mode when it
+    exists (an existing file keeps its permissions)."""
+    os.chmod(tmp, file_mode(path))
+    os.replace(tmp, path)
+
+
+def write_error(path, exc: OSError) -> OutputError:
+    """An OSError while writing PATH as one line naming PATH (ENOSPC: the disk is full)."""
+    reason = exc.strerror or str(exc)
+    if exc.errno in (errno.ENOSPC, errno.EDQUOT):
+        reason += " (the disk is full)"
+    return OutputError(f"cannot write {path}: {reason}; nothing was written")
+
+
+class OutputLock:
+    """An exclusive lock on an output (a file or a folder) for the length of a
+    run: a second run on the same output is refused at once, naming the
+    first's pid. The lock is a small file .NAME.lock next to the output,
+    removed at the end; a killed run's lock file is stale (the kernel released
+    its lock) and is taken over."""
+
+    def __init__(self, path):
+        self.path = os.path.abspath(os.fspath(path))
+        directory, name = os.path.split(self.path)
+        while not os.path.isdir(directory):  # an output in folders yet to be made: lock in the first that exists
+            directory, parent = os.path.split(directory)
+            name = f"{parent}%{name}"
+        self.lock_path = os.path.join(directory, f".{name}.lock")
+        self._fd = None
+
+    def acquire(self) -> "OutputLock":
+        while True:
+            try:
+                fd = os.open(self.lock_path, os.O_RDWR | os.O_CREAT, 0o644)
+            except OSError as e:
+                raise OutputError(f"{self.path}: cannot lock the output ({e.strerror})") from None
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                holder = os.read(fd, 32).decode(errors="replace").strip() or "?"
+                os.close(fd)
+                raise OutputError(f"{self.path}: another hdjoint run (pid {holder}) is writing this output; "
+                                  "wait for it to finish or choose another output") from None
+            # The holder before us may have removed the lock file after we opened it: lock the file on disk.
+            try:
+                same = os.path.samestat(os.fstat(fd), os.stat(self.lock_path))
+            except FileNotFoundError:
+                same = False
+            if same:
+                os.ftruncate(fd, 0)
+                os.write(fd, f"{os.getpid()}\n".encode())
+                self._fd = fd
+                return self
+            os.close(fd)
+
+    def release(self) -> None:
+        if self._fd is not None:
+            try:
+                os.unlink(self.lock_path)
+            except OSError:
+                pass
+            os.close(self._fd)
+            self._fd = None
+
+    def __enter__(self):
+        return self.acquire()
+
+    def __exit__(self, *exc):
+        self.release()
+
+
+def created_directory(out) -> list[Path]:
+    """The folders `Path(out).mkdir(parents=True)` would create, outermost first (to remove them on failure)."""
+    missing, p = [], Path(out).absolute()
+    while not p.exists():
+        missing.append(p)
+        p = p.parent
+    return missing[::-1]
