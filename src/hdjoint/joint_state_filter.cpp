@@ -249,6 +249,8 @@ FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointI
     }
     record_.x = kalman_.state();
     record_.P = kalman_.covariance();
+    if (finite(in)) current_change_ = std::fabs(in.i_m - previous_.i_m);
+    samples_held_ = 0.0;
     previous_ = finite(in) ? in : accepted_;
     record_.input = previous_;
 
@@ -268,8 +270,36 @@ FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointI
     return std::max(status, update.status);
 }
 
+void JointStateFilter::predict_without_reading(const JointInput& in) {
+    using namespace joint_state;
+    if (!started_) return;
+    samples_held_ += 1.0;
+    JointCovariance Q = process_noise();
+    const double a = p_.Kt * samples_held_ * current_change_ / (p_.N * p_.Jm);
+    Q(kDelta, kDelta) += a * a * std::pow(0.5 * p_.Ts * p_.Ts, 2);
+    Q(kDelta, kNu) += a * a * 0.5 * p_.Ts * p_.Ts * p_.Ts;
+    Q(kNu, kDelta) = Q(kDelta, kNu);
+    Q(kNu, kNu) += a * a * p_.Ts * p_.Ts;
+    kalman_.predict(system_, previous_, Q);
+    record_.x_prior = kalman_.state();
+    record_.P_prior = kalman_.covariance();
+    record_.predicted = true;
+    record_.F = kalman_.transition();
+    record_.x = kalman_.state();
+    record_.P = kalman_.covariance();
+    previous_ = finite(in) ? in : accepted_;
+    record_.input = previous_;
+    const JointTorque T = system_.torque(kalman_.state(), previous_);
+    if (T.valid) {
+        out_.tau = T.tau;
+        out_.tau_std = std::sqrt(std::max(torque_variance(T, kalman_.covariance()), 0.0));
+    }
+    out_.load = kalman_.state()(kLoad);
+    out_.nis = 0.0;  // no innovation
+}
+
 // [started, x (6), P (36, column-major), previous and accepted input (i_m, z, t each),
-//  outputs (tau, tau_std, load, nis), load noise scale, readings rejected]
+//  outputs (tau, tau_std, load, nis), load noise scale, readings rejected, current change, samples held]
 void JointStateFilter::save(std::vector<double>* out) const {
     out->push_back(started_ ? 1.0 : 0.0);
     const JointState& x = kalman_.state();
@@ -278,14 +308,14 @@ void JointStateFilter::save(std::vector<double>* out) const {
     out->insert(out->end(), P.data(), P.data() + kJointStates * kJointStates);
     out->insert(out->end(), {previous_.i_m, previous_.z, previous_.t, accepted_.i_m, accepted_.z, accepted_.t,
                              out_.tau, out_.tau_std, out_.load, out_.nis, load_noise_scale_,
-                             readings_rejected_ ? 1.0 : 0.0});
+                             readings_rejected_ ? 1.0 : 0.0, current_change_, samples_held_});
 }
 
 bool JointStateFilter::load(const std::vector<double>& in, std::size_t* cursor) {
     if (in.size() < *cursor + kSavedSize) return false;
     const double* d = in.data() + *cursor;
     const double* r = d + 1 + kJointStates + kJointStates * kJointStates;
-    if ((d[0] != 0.0 && d[0] != 1.0) || (r[11] != 0.0 && r[11] != 1.0)) return false;
+    if ((d[0] != 0.0 && d[0] != 1.0) || (r[11] != 0.0 && r[11] != 1.0) || !(r[12] >= 0.0) || !(r[13] >= 0.0)) return false;
     started_ = d[0] == 1.0;
     std::copy(d + 1, d + 1 + kJointStates, kalman_.state().data());
     std::copy(d + 1 + kJointStates, d + 1 + kJointStates + kJointStates * kJointStates, kalman_.covariance().data());
@@ -294,6 +324,8 @@ bool JointStateFilter::load(const std::vector<double>& in, std::size_t* cursor) 
     out_ = {r[6], r[7], r[8], r[9]};
     load_noise_scale_ = r[10];
     readings_rejected_ = r[11] == 1.0;
+    current_change_ = r[12];
+    samples_held_ = r[13];
     *cursor += kSavedSize;
     return true;
 }

@@ -157,14 +157,23 @@ public:
     // taken without the gate (a jump that persists is real: no lock-out).
     FilterStatus step(double theta_m, double theta_l, const JointInput& in);
 
+    // A sample without a reading (a gap: the inputs were held over it, so the
+    // encoders were not read at this sample's time): the filter only
+    // predicts, with the input held since the last sample, and P grows, so
+    // does tau_std. The current is not known over the gap either: the k-th
+    // sample without a reading adds k times the last change of the current
+    // between two readings (|di|) to the current's noise, a ramp the held
+    // value misses. Nothing happens before the first sample.
+    void predict_without_reading(const JointInput& in);
+
     const JointFilterOutput& output() const { return out_; }
     const JointFilterRecord& record() const { return record_; }
     const JointState& state() const { return kalman_.state(); }
     const JointCovariance& covariance() const { return kalman_.covariance(); }
     bool started() const { return started_; }
 
-    // Flat state: 1 + 6 + 36 + 3 + 3 + 4 + 2 values.
-    static constexpr std::size_t kSavedSize = 55;
+    // Flat state: 1 + 6 + 36 + 3 + 3 + 4 + 2 + 2 values.
+    static constexpr std::size_t kSavedSize = 57;
 
     // The variance of a torque at a state of covariance P (first order).
     static double torque_variance(const JointTorque& T, const JointCovariance& P);
@@ -187,6 +196,8 @@ private:
     // load states' process noise is scaled by max(1, it) (jsf_load_adapt_time).
     double load_noise_scale_ = 1.0;
     bool readings_rejected_ = false;  // the last sample's readings failed the gate
+    double current_change_ = 0.0;  // |di| between the last two samples with readings, A
+    double samples_held_ = 0.0;    // samples predicted without a reading since the last reading
     double adapt_weight_ = 0.0;  // Ts / jsf_load_adapt_time (0: off)
     JointCovariance process_noise() const;
     // The NIS gate for readings z at the predicted state: kOutlierGate, or
