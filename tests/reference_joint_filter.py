@@ -73,13 +73,27 @@ def noise(p):
     qm = TWO_PI / p["motor_counts"] if p["motor_counts"] > 0 else 0.0
     ql = TWO_PI / p["link_counts"] if p["link_counts"] > 0 else 0.0
     R = np.diag([max(p["jsf_r_theta_m"] ** 2 + qm * qm / 12, 1e-24), max(p["jsf_r_theta_l"] ** 2 + ql * ql / 12, 1e-24)])
-    return Q, R, np.array([qm / 2, ql / 2])
+    return Q, R, np.array([qm / 2, ql / 2]), np.array([qm * qm / 12, ql * ql / 12])
+
+
+# A reading equal to the one before repeats its quantisation error: the k-th
+# repeat's quantisation variance is (1 + REPEAT_WEIGHT*k) q^2/12 (as documented).
+REPEAT_WEIGHT = 0.3
+
+
+def repeats(readings):
+    """How many readings just before each one are equal to it."""
+    count = np.zeros(len(readings))
+    for k in range(1, len(readings)):
+        count[k] = count[k - 1] + 1 if readings[k] == readings[k - 1] else 0
+    return count
 
 
 def joint_filter(p, i_m, theta_m, theta_l):
     """Filter over samples; returns tau_hat, tau_hat_std and what the smoother needs."""
     n = len(i_m)
-    Q, R, offset = noise(p)
+    Q, R0, offset, quantisation = noise(p)
+    repeated = np.column_stack([repeats(theta_m), repeats(theta_l)])
     H = np.array([[p["N"], 0, p["N"], 0, 0, 0], [1.0, 0, 0, 0, 0, 0]])
     out = {"tau_hat": np.empty(n), "tau_hat_std": np.empty(n)}
     store = {"x": [], "P": [], "x_prior": [], "P_prior": [], "F": []}
@@ -99,6 +113,7 @@ def joint_filter(p, i_m, theta_m, theta_l):
         store["x_prior"].append(x.copy())
         store["P_prior"].append(P.copy())
         store["F"].append(F)
+        R = R0 + np.diag(REPEAT_WEIGHT * repeated[k] * quantisation)
         S = H @ P @ H.T + R
         K = P @ H.T @ np.linalg.inv(S)
         x = x + K @ (z - H @ x)

@@ -156,6 +156,8 @@ JointStateFilter::JointStateFilter(const Parameters& p) : p_(p) {
     R_.setZero();
     R_(0, 0) = std::max(p.jsf_r_theta_m * p.jsf_r_theta_m + qm * qm / 12.0, kMinReadingVariance);
     R_(1, 1) = std::max(p.jsf_r_theta_l * p.jsf_r_theta_l + ql * ql / 12.0, kMinReadingVariance);
+    quantisation_m_ = qm * qm / 12.0;
+    quantisation_l_ = ql * ql / 12.0;
     JointState sd0;
     sd0(kThetaL) = kP0Angle;
     sd0(kOmegaL) = kP0Speed;
@@ -187,6 +189,21 @@ double JointStateFilter::torque_variance(const JointTorque& T, const JointCovari
            T.d_delta * T.d_delta * P(kDelta, kDelta);
 }
 
+Matrix<2> JointStateFilter::reading_covariance(double theta_m, double theta_l) {
+    // A reading equal to the last one carries the same quantisation error
+    // (the angle stayed inside one count), not a fresh one: the k-th repeat's
+    // quantisation variance is (1 + kRepeatedReadingWeight*k) q^2/12, so n
+    // equal readings say about as much as ln(n)/kRepeatedReadingWeight fresh ones.
+    repeats_m_ = started_ && theta_m == last_m_ ? repeats_m_ + 1.0 : 0.0;
+    repeats_l_ = started_ && theta_l == last_l_ ? repeats_l_ + 1.0 : 0.0;
+    last_m_ = theta_m;
+    last_l_ = theta_l;
+    Matrix<2> R = R_;
+    R(0, 0) += kRepeatedReadingWeight * repeats_m_ * quantisation_m_;
+    R(1, 1) += kRepeatedReadingWeight * repeats_l_ * quantisation_l_;
+    return R;
+}
+
 double JointStateFilter::gate(const Vector<2>& z) const {
     // A filter told its readings are exact (no quantisation, no noise) has
     // NIS in the millions on a model error of a micro-radian: only an
@@ -203,6 +220,7 @@ FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointI
     const Vector<2> z(theta_m + offset_m_, theta_l + offset_l_);
     FilterStatus status = FilterStatus::Ok;
     UnscentedKalmanFilter<kJointStates>::Update<2> update;
+    const Matrix<2> R = readable ? reading_covariance(theta_m, theta_l) : R_;
     if (!started_) {
         if (!readable || !finite(in)) return FilterStatus::SampleRejected;  // nothing to start from
         // At rest, in static balance: the link load holds the torque the torsion shows.
@@ -217,7 +235,7 @@ FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointI
         record_.F.setIdentity();
         record_.x_prior = kalman_.state();
         record_.P_prior = kalman_.covariance();
-        update = kalman_.update(measurement_, z, R_);
+        update = kalman_.update(measurement_, z, R);
         accepted_ = in;
         started_ = true;
     } else {
@@ -226,7 +244,7 @@ FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointI
         status = kalman_.predict(system_, previous_, Q);
         record_.x_prior = kalman_.state();
         record_.P_prior = kalman_.covariance();
-        update = readable ? kalman_.update(measurement_, z, R_, gate(z)) : decltype(update){};
+        update = readable ? kalman_.update(measurement_, z, R, gate(z)) : decltype(update){};
         if (!readable || update.status == FilterStatus::SampleRejected) {
             // The current held since the last sample may be the outlier:
             // predict again with the last one that passed; if the readings
@@ -236,7 +254,7 @@ FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointI
             status = std::max(status, kalman_.predict(system_, accepted_, Q));
             record_.x_prior = kalman_.state();
             record_.P_prior = kalman_.covariance();
-            if (readable) update = kalman_.update(measurement_, z, R_, gate(z));
+            if (readable) update = kalman_.update(measurement_, z, R, gate(z));
             readings_rejected_ = readable && update.status == FilterStatus::SampleRejected;
             update.nis = rejected_nis;
             update.status = FilterStatus::SampleRejected;
@@ -299,7 +317,8 @@ void JointStateFilter::predict_without_reading(const JointInput& in) {
 }
 
 // [started, x (6), P (36, column-major), previous and accepted input (i_m, z, t each),
-//  outputs (tau, tau_std, load, nis), load noise scale, readings rejected, current change, samples held]
+//  outputs (tau, tau_std, load, nis), load noise scale, readings rejected, current change, samples held,
+//  last readings (theta_m, theta_l), their repeats]
 void JointStateFilter::save(std::vector<double>* out) const {
     out->push_back(started_ ? 1.0 : 0.0);
     const JointState& x = kalman_.state();
@@ -308,14 +327,17 @@ void JointStateFilter::save(std::vector<double>* out) const {
     out->insert(out->end(), P.data(), P.data() + kJointStates * kJointStates);
     out->insert(out->end(), {previous_.i_m, previous_.z, previous_.t, accepted_.i_m, accepted_.z, accepted_.t,
                              out_.tau, out_.tau_std, out_.load, out_.nis, load_noise_scale_,
-                             readings_rejected_ ? 1.0 : 0.0, current_change_, samples_held_});
+                             readings_rejected_ ? 1.0 : 0.0, current_change_, samples_held_, last_m_, last_l_,
+                             repeats_m_, repeats_l_});
 }
 
 bool JointStateFilter::load(const std::vector<double>& in, std::size_t* cursor) {
     if (in.size() < *cursor + kSavedSize) return false;
     const double* d = in.data() + *cursor;
     const double* r = d + 1 + kJointStates + kJointStates * kJointStates;
-    if ((d[0] != 0.0 && d[0] != 1.0) || (r[11] != 0.0 && r[11] != 1.0) || !(r[12] >= 0.0) || !(r[13] >= 0.0)) return false;
+    if ((d[0] != 0.0 && d[0] != 1.0) || (r[11] != 0.0 && r[11] != 1.0) || !(r[12] >= 0.0) || !(r[13] >= 0.0) ||
+        !(r[16] >= 0.0) || !(r[17] >= 0.0))
+        return false;
     started_ = d[0] == 1.0;
     std::copy(d + 1, d + 1 + kJointStates, kalman_.state().data());
     std::copy(d + 1 + kJointStates, d + 1 + kJointStates + kJointStates * kJointStates, kalman_.covariance().data());
@@ -326,6 +348,10 @@ bool JointStateFilter::load(const std::vector<double>& in, std::size_t* cursor) 
     readings_rejected_ = r[11] == 1.0;
     current_change_ = r[12];
     samples_held_ = r[13];
+    last_m_ = r[14];
+    last_l_ = r[15];
+    repeats_m_ = r[16];
+    repeats_l_ = r[17];
     *cursor += kSavedSize;
     return true;
 }
