@@ -78,7 +78,7 @@ def noise(p):
 
 # A reading equal to the one before repeats its quantisation error: the k-th
 # repeat's quantisation variance is (1 + REPEAT_WEIGHT*k) q^2/12 (as documented).
-REPEAT_WEIGHT = 0.3
+REPEAT_WEIGHT = 0.02
 
 
 def repeats(readings):

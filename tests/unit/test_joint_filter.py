@@ -209,3 +209,24 @@ def test_a_gap_is_predicted_over_without_a_spike(gappy_run, tmp_path, capsys, en
     # Where the recording is regular, the estimates are those of the regular recording (far from the gaps).
     full = _core.run_estimator(parameters.for_estimator(p), rec.time, rec.i_m, rec.theta_m, rec.theta_l)
     np.testing.assert_allclose(est["tau_hat"][:590], full["tau_hat"][:590], rtol=0, atol=1e-12)
+
+
+def test_coverage_is_honest_where_the_joint_dwells():
+    """Slow sweeps with dwells and payload steps (the benchmark's case, 8 s): +-2 sigma of tau_hat_std
+    and tau_smooth_std cover 93-97 % of the true torque, and the smoother is the better estimate. A
+    joint that stands still repeats its encoder readings and their quantisation errors; taken as fresh
+    readings, the smoother averaged that constant error away (the benchmark's 30 s: 73.6 %)."""
+    joint = {**parameters.defaults(), "motor_counts": 4096.0, "link_counts": 524288.0}
+    rec = experiments.run("sweep", joint=joint, nominal=parameters.defaults(), duration=8.0,
+                          sensors=experiments.Sensors(seed=13), tau_ext=experiments.payload_steps)
+    # The benchmark's estimator: the corrected transmission, the link model a few percent off,
+    # its noise settings as tuned on its separate tuning recording (default encoders).
+    p = {**joint, "wg_load": 1.0, "Jl": 1.05 * joint["Jl"], "Bl": 1.10 * joint["Bl"], "mgl": 0.96 * joint["mgl"],
+         "jsf_q_load": 0.03, "jsf_q_load_rate": 1.0, "jsf_q_motor": 0.0}
+    est = _core.run_estimator(parameters.for_estimator(p), rec.time, rec.i_m, rec.theta_m, rec.theta_l, smooth=True)
+    truth = rec.extra["tau_joint"][500:]  # after the start-up
+    coverage = {name: 100.0 * np.mean(np.abs(est[name][500:] - truth) <= 2.0 * est[name + "_std"][500:])
+                for name in ("tau_hat", "tau_smooth")}
+    assert all(93.0 <= c <= 97.0 for c in coverage.values()), coverage
+    rms = {name: error_figures(est[name][500:], truth).rms for name in ("tau_hat", "tau_smooth")}
+    assert rms["tau_smooth"] < rms["tau_hat"], rms
