@@ -61,7 +61,9 @@ bool JointSystemModel::derivative(const State& x, const Control& u, State* dx, J
     const double theta_m = q.N * (theta_l + x(kDelta)), omega_m = q.N * (omega_l + nu);
     const double scale = friction_drift_scale(u.t, q);
     const double NJm = q.N * q.Jm;
-    const double a_l = (T.tau - q.Bl * omega_l - q.mgl * std::sin(theta_l) - w) / q.Jl;
+    const double inertia = q.Jl * (1.0 + x(kInertiaError));
+    if (!(inertia > 0.0)) return false;
+    const double a_l = (T.tau - q.Bl * omega_l - q.mgl * std::sin(theta_l) - w) / inertia;
     const double a_m = (motor_torque(u.i_m, theta_m, u.t, q) - motor_friction(omega_m, q, scale) - T.tau / q.N) / NJm;
     (*dx)(kThetaL) = omega_l;
     (*dx)(kOmegaL) = a_l;
@@ -69,15 +71,17 @@ bool JointSystemModel::derivative(const State& x, const Control& u, State* dx, J
     (*dx)(kNu) = a_m - a_l;
     (*dx)(kLoad) = x(kLoadRate);
     (*dx)(kLoadRate) = 0.0;
+    (*dx)(kInertiaError) = 0.0;
 
     const double cog = cogging_on(q) ? cogging_slope(theta_m, q) : 0.0;  // d/d theta_m
     const double friction = coulomb_friction_slope(omega_m, q, scale) + q.Bm;  // d/d omega_m
     J->setZero();
     (*J)(kThetaL, kOmegaL) = 1.0;
-    (*J)(kOmegaL, kThetaL) = (T.d_theta_l - q.mgl * std::cos(theta_l)) / q.Jl;
-    (*J)(kOmegaL, kOmegaL) = -q.Bl / q.Jl;
-    (*J)(kOmegaL, kDelta) = T.d_delta / q.Jl;
-    (*J)(kOmegaL, kLoad) = -1.0 / q.Jl;
+    (*J)(kOmegaL, kThetaL) = (T.d_theta_l - q.mgl * std::cos(theta_l)) / inertia;
+    (*J)(kOmegaL, kOmegaL) = -q.Bl / inertia;
+    (*J)(kOmegaL, kDelta) = T.d_delta / inertia;
+    (*J)(kOmegaL, kLoad) = -1.0 / inertia;
+    (*J)(kOmegaL, kInertiaError) = -a_l * q.Jl / inertia;
     (*J)(kDelta, kNu) = 1.0;
     const double am_theta_l = (cog * q.N - T.d_theta_l / q.N) / NJm;
     const double am_speed = -friction * q.N / NJm;  // by omega_l and by nu
@@ -87,6 +91,7 @@ bool JointSystemModel::derivative(const State& x, const Control& u, State* dx, J
     (*J)(kNu, kDelta) = am_delta - (*J)(kOmegaL, kDelta);
     (*J)(kNu, kNu) = am_speed;
     (*J)(kNu, kLoad) = -(*J)(kOmegaL, kLoad);
+    (*J)(kNu, kInertiaError) = -(*J)(kOmegaL, kInertiaError);
     (*J)(kLoad, kLoadRate) = 1.0;
     return dx->allFinite() && J->allFinite();
 }
@@ -101,7 +106,7 @@ JointState JointSystemModel::step(const State& x, const Control& u, JointCovaria
     }
     // M = I - c*J, c = h/2. J's rows kThetaL, kDelta, kLoad are the
     // kinematic identities (d theta_l = omega_l, d delta = nu, d w = r) and
-    // row kLoadRate is zero, so M z = y reduces to a 2x2 system in
+    // rows kLoadRate and kInertiaError are zero, so M z = y reduces to a 2x2 system in
     // (z_omega_l, z_nu): solved in closed form (the same numbers as a general
     // LU up to round-off, at a fraction of its cost).
     using namespace joint_state;
@@ -114,10 +119,11 @@ JointState JointSystemModel::step(const State& x, const Control& u, JointCovaria
     auto solve = [&](const State& y) {
         State z;
         z(kLoadRate) = y(kLoadRate);
+        z(kInertiaError) = y(kInertiaError);
         z(kLoad) = y(kLoad) + c * z(kLoadRate);
         auto rhs = [&](int row) {
             return y(row) + c * (J(row, kThetaL) * y(kThetaL) + J(row, kDelta) * y(kDelta) + J(row, kLoad) * z(kLoad) +
-                                 J(row, kLoadRate) * z(kLoadRate));
+                                 J(row, kLoadRate) * z(kLoadRate) + J(row, kInertiaError) * z(kInertiaError));
         };
         const double r1 = rhs(kOmegaL), r3 = rhs(kNu);
         z(kOmegaL) = (a33 * r1 - a13 * r3) / det;
@@ -149,6 +155,7 @@ JointStateFilter::JointStateFilter(const Parameters& p) : p_(p) {
     Q_ = (a * a) * (G * G.transpose());
     Q_(kLoad, kLoad) = p.jsf_q_load * p.jsf_q_load;
     Q_(kLoadRate, kLoadRate) = p.jsf_q_load_rate * p.jsf_q_load_rate;
+    Q_(kInertiaError, kInertiaError) = kQInertiaError * kQInertiaError;
     // Floor quantisers: reading + q/2 is unbiased, variance q^2/12.
     const double qm = resolution(p.motor_counts), ql = resolution(p.link_counts);
     offset_m_ = 0.5 * qm;
@@ -165,6 +172,7 @@ JointStateFilter::JointStateFilter(const Parameters& p) : p_(p) {
     sd0(kNu) = kP0Speed;
     sd0(kLoad) = p.jsf_p0_load;
     sd0(kLoadRate) = p.jsf_p0_load;  // per second
+    sd0(kInertiaError) = kP0InertiaError;
     const JointCovariance P0 = sd0.cwiseAbs2().asDiagonal();
     adapt_weight_ = p.jsf_load_adapt_time > 0.0 ? std::min(1.0, p.Ts / p.jsf_load_adapt_time) : 0.0;
     kalman_ = UnscentedKalmanFilter<kJointStates>(merwe_weights<kJointStates>(1.0, 2.0, 0.0), JointState::Zero(), P0);

@@ -3,7 +3,7 @@
 // filter on the raw encoder angles, driven by the motor current, and an
 // offline Rauch-Tung-Striebel smoother over it.
 //
-// State x = [theta_l, omega_l, delta, nu, w, r] (link-side units):
+// State x = [theta_l, omega_l, delta, nu, w, r, g] (link-side units):
 //   theta_l, omega_l  link angle and speed,
 //   delta = theta_m/N - theta_l   total torsion (its own state: theta_m/N and
 //                                 theta_l are almost perfectly correlated),
@@ -12,11 +12,15 @@
 //                                 (external torque, Jl/Bl/mgl errors), a random walk
 //                                 plus its rate r (an integrated random walk: loads
 //                                 that ramp, such as contacts, are followed without lag).
-//   d(w)/dt = r, d(r)/dt = noise
+//   g                             the link inertia's relative error: the link's
+//                                 inertia is Jl*(1 + g), g a constant the filter learns
+//                                 (prior kP0InertiaError); a Jl 5 % off otherwise makes
+//                                 the load w follow 5 % of the inertial torque.
+//   d(w)/dt = r, d(r)/dt = noise, d(g)/dt = 0
 // Dynamics, with tau(x) the transmitted torque of the corrected compliance
 // chain (eq. 3-8 with kinematic error, wave generator, backlash, the
 // hysteresis torque z of the compliance model):
-//   Jl*d(omega_l)/dt         = tau - Bl*omega_l - mgl*sin(theta_l) - w
+//   Jl*(1 + g)*d(omega_l)/dt = tau - Bl*omega_l - mgl*sin(theta_l) - w
 //   N*Jm*d(omega_l + nu)/dt  = Kt*i_m + cogging - tau_fm(omega_m) - Bm*omega_m - tau/N
 // discretised by the linearly implicit trapezoidal rule (A-stable, keeps the
 // undamped torsional resonance undamped; F = (I - h/2 J)^-1 (I + h/2 J)).
@@ -36,10 +40,10 @@
 
 namespace hdjoint {
 
-constexpr int kJointStates = 6;
+constexpr int kJointStates = 7;
 // Named indices of the state vector.
 namespace joint_state {
-enum Index : int { kThetaL = 0, kOmegaL = 1, kDelta = 2, kNu = 3, kLoad = 4, kLoadRate = 5 };
+enum Index : int { kThetaL = 0, kOmegaL = 1, kDelta = 2, kNu = 3, kLoad = 4, kLoadRate = 5, kInertiaError = 6 };
 }
 using JointState = Vector<kJointStates>;
 using JointCovariance = Matrix<kJointStates>;
@@ -138,6 +142,12 @@ struct JointFilterOutput {
 // 97.1 %), 0.3 97.5 % (tau_hat 98.0 %); the RMS error is within 5 % across them.
 constexpr double kRepeatedReadingWeight = 0.02;
 
+// The prior deviation of the link inertia's relative error g (10 %: a link
+// model from CAD or a catalogue), and its random walk per sample (it may
+// drift slowly: a payload changes it).
+constexpr double kP0InertiaError = 0.1;
+constexpr double kQInertiaError = 1e-5;
+
 // NIS above which a sample is an outlier. On the benchmark's valid samples
 // (payload steps, contacts, hysteresis, coarse encoders) the gate rejects
 // none (docs/estimators.md); a 1e6 A current or a glitched reading gives NIS
@@ -182,8 +192,8 @@ public:
     const JointCovariance& covariance() const { return kalman_.covariance(); }
     bool started() const { return started_; }
 
-    // Flat state: 1 + 6 + 36 + 3 + 3 + 4 + 2 + 2 + 4 values.
-    static constexpr std::size_t kSavedSize = 61;
+    // Flat state: 1 + 7 + 49 + 3 + 3 + 4 + 2 + 2 + 4 values.
+    static constexpr std::size_t kSavedSize = 75;
 
     // The variance of a torque at a state of covariance P (first order).
     static double torque_variance(const JointTorque& T, const JointCovariance& P);

@@ -96,10 +96,10 @@ def test_nis_scaled_deviations_are_honest_where_the_papers_ukf_is_overconfident(
     # Coverage of +-2 sigma (95 % when honest). The paper's UKF on coarse
     # encoders believes itself far too much; std_nis_time widens each
     # deviation by the innovations it did not expect (benchmark: 93-95 %).
-    # The UKF's settings are the benchmark's tuning for these encoders: a
+    # Both filters' settings are the benchmark's tuning for these encoders: a
     # grossly mistuned filter (the defaults' ukf_r_torsion here) stays dishonest.
     rec, p = coarse_run
-    p = {**p, "ukf_q_tau": 0.1, "ukf_r_torsion": 6e-5, "ukf_r_omega": 0.3}
+    p = {**p, "ukf_q_tau": 0.1, "ukf_r_torsion": 6e-5, "ukf_r_omega": 0.3, "jsf_q_load": 0.003, "jsf_q_motor": 0.0}
     truth = rec.extra["tau_joint"][1000:]  # after the start-up
     coverage = {}
     for t in (0.0, 0.05):
@@ -222,7 +222,7 @@ def test_coverage_is_honest_where_the_joint_dwells():
     # The benchmark's estimator: the corrected transmission, the link model a few percent off,
     # its noise settings as tuned on its separate tuning recording (default encoders).
     p = {**joint, "wg_load": 1.0, "Jl": 1.05 * joint["Jl"], "Bl": 1.10 * joint["Bl"], "mgl": 0.96 * joint["mgl"],
-         "jsf_q_load": 0.03, "jsf_q_load_rate": 1.0, "jsf_q_motor": 0.0}
+         "jsf_q_load": 0.001, "jsf_q_load_rate": 1.0, "jsf_q_motor": 0.0}
     est = _core.run_estimator(parameters.for_estimator(p), rec.time, rec.i_m, rec.theta_m, rec.theta_l, smooth=True)
     truth = rec.extra["tau_joint"][500:]  # after the start-up
     coverage = {name: 100.0 * np.mean(np.abs(est[name][500:] - truth) <= 2.0 * est[name + "_std"][500:])
