@@ -204,6 +204,9 @@ def test_a_gap_is_predicted_over_without_a_spike(gappy_run, tmp_path, capsys, en
         e = np.abs(est[name] - truth)
         assert np.all(np.isfinite(e)), name
         assert np.max(e[after]) < bound, (name, np.max(e[after]))
+    # The smoother stays the better estimate across the gaps.
+    rms = {name: error_figures(est[name][after], truth[after]).rms for name in ("tau_hat", "tau_smooth")}
+    assert rms["tau_smooth"] < rms["tau_hat"], rms
     # The deviation widens over the gap: more at the gap's rows than at the rows before.
     assert np.all(est["tau_hat_std"][gap] > 1.2 * est["tau_hat_std"][gap - 1])
     # Where the recording is regular, the estimates are those of the regular recording (far from the gaps).
