@@ -116,7 +116,7 @@ public:
         for (std::size_t j = 0; j < n; ++j, ++rows_) {
             const double step_end = j + 1 < n ? time(j + 1) : end;
             std::string message;
-            const EstimatorStatus s = estimator_.advance_to(step_end, {i_m(j), theta_m(j), theta_l(j)}, &message, [&] {
+            const EstimatorStatus s = estimator_.advance_to(step_end, time(j), {i_m(j), theta_m(j), theta_l(j)}, &message, [&] {
                 const JointStateFilter& filter = estimator_.joint_filter();
                 if (keep_records_ && filter.started() && (records_ == 0 || filter.record().predicted)) {
                     keep(filter.record());

@@ -222,8 +222,9 @@ double JointStateFilter::gate(const Vector<2>& z) const {
     return angle > kOutlierAngle ? kOutlierGate : std::numeric_limits<double>::infinity();
 }
 
-FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointInput& in) {
+FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointInput& in, double age) {
     using namespace joint_state;
+    measurement_.age = std::isfinite(age) ? age : 0.0;
     const bool readable = std::isfinite(theta_m) && std::isfinite(theta_l);
     const Vector<2> z(theta_m + offset_m_, theta_l + offset_l_);
     FilterStatus status = FilterStatus::Ok;

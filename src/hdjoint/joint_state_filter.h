@@ -94,13 +94,18 @@ public:
     }
 };
 
-// theta_m and theta_l, linear in the state.
+// theta_m and theta_l, linear in the state. A reading taken `age` seconds
+// before the sample (a jittered recording: the row came a little before the
+// sample that uses it) is of the link angle then, to first order
+// theta_l - age*omega_l; the torsion is taken as read (its rate swings with
+// the torsional mode, which a first-order shift over a few ms would not follow).
 struct JointMeasurementModel {
     static constexpr int kSize = 2;
     static constexpr bool kLinear = true;
     using Vector = hdjoint::Vector<2>;
     using Covariance = Matrix<2>;
     double N = 100.0;
+    double age = 0.0;  // s
 
     Eigen::Matrix<double, 2, kJointStates> jacobian() const {
         using namespace joint_state;
@@ -108,11 +113,16 @@ struct JointMeasurementModel {
         H(0, kThetaL) = N;
         H(0, kDelta) = N;
         H(1, kThetaL) = 1.0;
+        if (age != 0.0) {
+            H(0, kOmegaL) = -age * N;
+            H(1, kOmegaL) = -age;
+        }
         return H;
     }
     Vector h(const JointState& x) const {
         using namespace joint_state;
-        return Vector(N * (x(kThetaL) + x(kDelta)), x(kThetaL));
+        const double theta_l = x(kThetaL) - age * x(kOmegaL);
+        return Vector(N * (theta_l + x(kDelta)), theta_l);
     }
 };
 
@@ -175,7 +185,9 @@ public:
     // tau_std grows. Either way the status is SampleRejected and the next
     // valid sample is used as usual. Readings that fail twice in a row are
     // taken without the gate (a jump that persists is real: no lock-out).
-    FilterStatus step(double theta_m, double theta_l, const JointInput& in);
+    // `age`: how long before this sample the readings were taken (s, 0 on a
+    // regular recording; see JointMeasurementModel).
+    FilterStatus step(double theta_m, double theta_l, const JointInput& in, double age = 0.0);
 
     // A sample without a reading (a gap: the inputs were held over it, so the
     // encoders were not read at this sample's time): the filter only

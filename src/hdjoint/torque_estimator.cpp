@@ -39,7 +39,7 @@ TorqueEstimator::TorqueEstimator(const Parameters& p, double start_time)
                                     Vector<2>::Zero(), P0);
 }
 
-EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* message, bool reading) {
+EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* message, bool reading, double age) {
     if (!std::isfinite(in.i_m) || !std::isfinite(in.theta_m) || !std::isfinite(in.theta_l)) {
         if (message) *message = describe_input(in);
         return EstimatorStatus::InvalidInput;
@@ -93,7 +93,8 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
     previous_theta_m_ = c.theta_m;
     // The joint-state filter on the same (delayed) angles, current and hysteresis torque.
     const double t = static_cast<double>(samples_) * p_.Ts;
-    const FilterStatus joint = joint_.step(c.theta_m, c.theta_l, {in.i_m, c.z, t});
+    // (The compliance model's delay line matches the current with earlier angles: their age is the row's.)
+    const FilterStatus joint = joint_.step(c.theta_m, c.theta_l, {in.i_m, c.z, t}, age);
     out_.tau_hat = joint_.output().tau;
     out_.tau_hat_std = consistent(joint_.output().tau_std, joint_.output().nis, p_.Ts, p_.std_nis_time, &nis_mean_hat_);
     out_.tau_load = joint_.output().load;
