@@ -141,7 +141,8 @@ EstimatorStatus TorqueEstimator::advance_to(double end, double read_at, const Es
     bool first_sample = true;
     const bool bounded = clock_.run_until(end, [&](double t) {
         std::string m;
-        const double age = std::max(0.0, t - read_at);
+        // Within the sample clock's tolerance (a millionth of Ts) a reading is on time.
+        const double age = t - read_at > 1e-6 * p_.Ts ? t - read_at : 0.0;
         const EstimatorStatus s = step(in, &m, first_sample || age < kMaxReadingAge * p_.Ts, age);
         first_sample = false;
         if (s != EstimatorStatus::Ok && first.empty()) first = m;
