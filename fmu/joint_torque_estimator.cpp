@@ -21,7 +21,7 @@ private:
     // A step [t, t+h) runs the samples inside it with the inputs set at t.
     Result step(double t, double h) override {
         std::string message;
-        const EstimatorStatus s = core_->advance_to(t + h, in_, &message);
+        const EstimatorStatus s = core_->advance_to(t + h, t, in_, &message);
         if (s == EstimatorStatus::Ok) return Result::ok();
         return recoverable(s) ? Result::warning(message) : Result::error(message);
     }

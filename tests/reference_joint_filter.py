@@ -2,7 +2,7 @@
 RTS smoother (tau_hat, tau_smooth), a test oracle for the C++ code.
 
 Written from the model as documented in joint_state_filter.h and the README
-(state [theta_l, omega_l, delta, nu, w, r], two-mass dynamics driven by the
+(state [theta_l, omega_l, delta, nu, w, r, g], two-mass dynamics driven by the
 current, linearly implicit trapezoidal step, floor-quantised encoder
 readings), not from the C++ sources. Deliberately different in method where
 it can be: the Jacobian of the dynamics comes from complex-step
@@ -20,6 +20,9 @@ from reference_model import kinematic_error, torque_from_torsion, wave_generator
 TWO_PI = 2 * np.pi
 # Initial spreads of the states the first reading does not fix (as documented).
 P0_ANGLE, P0_TORSION, P0_SPEED = 1e-2, 1e-3, 0.1
+# The link inertia's relative error g: its prior deviation and random walk per sample (as documented).
+P0_INERTIA, Q_INERTIA = 0.1, 1e-5
+N_STATES = 7
 
 
 def joint_torque(p, x, i_m):
@@ -31,13 +34,13 @@ def joint_torque(p, x, i_m):
 
 
 def dynamics(p, x, i_m):
-    theta_l, omega_l, delta, nu, w, rate = x
+    theta_l, omega_l, delta, nu, w, rate, g = x
     tau = joint_torque(p, x, i_m)
     omega_m = p["N"] * (omega_l + nu)
     friction = p["Fc"] * np.tanh(omega_m / p["omega_fc"]) + p["Bm"] * omega_m
-    link_acc = (tau - p["Bl"] * omega_l - p["mgl"] * np.sin(theta_l) - w) / p["Jl"]
+    link_acc = (tau - p["Bl"] * omega_l - p["mgl"] * np.sin(theta_l) - w) / (p["Jl"] * (1 + g))
     motor_acc = (p["Kt"] * i_m - friction - tau / p["N"]) / (p["N"] * p["Jm"])  # of omega_l + nu
-    return np.array([omega_l, link_acc, nu, motor_acc - link_acc, rate, 0.0 * w])
+    return np.array([omega_l, link_acc, nu, motor_acc - link_acc, rate, 0.0 * w, 0.0 * g])
 
 
 def complex_step_jacobian(fun, x, h=1e-30):
@@ -59,46 +62,63 @@ def transition(p, x, i_m):
     h = p["Ts"]
     f = dynamics(p, x, i_m)
     J = complex_step_jacobian(lambda y: dynamics(p, y, i_m), x)
-    M = np.eye(6) - 0.5 * h * J
-    return x + scipy.linalg.solve(M, h * f), scipy.linalg.solve(M, np.eye(6) + 0.5 * h * J)
+    M = np.eye(N_STATES) - 0.5 * h * J
+    return x + scipy.linalg.solve(M, h * f), scipy.linalg.solve(M, np.eye(N_STATES) + 0.5 * h * J)
 
 
 def noise(p):
     h = p["Ts"]
     a = np.hypot(p["Kt"] * p["jsf_current_noise"], p["jsf_q_motor"]) / (p["N"] * p["Jm"])
-    G = np.array([0.0, 0.0, h * h / 2, h, 0.0, 0.0])
+    G = np.array([0.0, 0.0, h * h / 2, h, 0.0, 0.0, 0.0])
     Q = a * a * np.outer(G, G)
     Q[4, 4] += p["jsf_q_load"] ** 2
     Q[5, 5] += p["jsf_q_load_rate"] ** 2
+    Q[6, 6] += Q_INERTIA ** 2
     qm = TWO_PI / p["motor_counts"] if p["motor_counts"] > 0 else 0.0
     ql = TWO_PI / p["link_counts"] if p["link_counts"] > 0 else 0.0
     R = np.diag([max(p["jsf_r_theta_m"] ** 2 + qm * qm / 12, 1e-24), max(p["jsf_r_theta_l"] ** 2 + ql * ql / 12, 1e-24)])
-    return Q, R, np.array([qm / 2, ql / 2])
+    return Q, R, np.array([qm / 2, ql / 2]), np.array([qm * qm / 12, ql * ql / 12])
+
+
+# A reading equal to the one before repeats its quantisation error: the k-th
+# repeat's quantisation variance is (1 + REPEAT_WEIGHT*k) q^2/12 (as documented).
+REPEAT_WEIGHT = 0.02
+
+
+def repeats(readings):
+    """How many readings just before each one are equal to it."""
+    count = np.zeros(len(readings))
+    for k in range(1, len(readings)):
+        count[k] = count[k - 1] + 1 if readings[k] == readings[k - 1] else 0
+    return count
 
 
 def joint_filter(p, i_m, theta_m, theta_l):
     """Filter over samples; returns tau_hat, tau_hat_std and what the smoother needs."""
     n = len(i_m)
-    Q, R, offset = noise(p)
-    H = np.array([[p["N"], 0, p["N"], 0, 0, 0], [1.0, 0, 0, 0, 0, 0]])
+    Q, R0, offset, quantisation = noise(p)
+    repeated = np.column_stack([repeats(theta_m), repeats(theta_l)])
+    H = np.array([[p["N"], 0, p["N"], 0, 0, 0, 0], [1.0, 0, 0, 0, 0, 0, 0]])
     out = {"tau_hat": np.empty(n), "tau_hat_std": np.empty(n)}
     store = {"x": [], "P": [], "x_prior": [], "P_prior": [], "F": []}
     x = P = None
     for k in range(n):
         z = np.array([theta_m[k], theta_l[k]]) + offset
         if k == 0:
-            x = np.zeros(6)
+            x = np.zeros(N_STATES)
             x[0] = z[1]
             x[2] = z[0] / p["N"] - z[1]
             x[4] = joint_torque(p, x, i_m[0]) - p["mgl"] * np.sin(x[0])
-            P = np.diag([P0_ANGLE**2, P0_SPEED**2, P0_TORSION**2, P0_SPEED**2, p["jsf_p0_load"] ** 2, p["jsf_p0_load"] ** 2])
-            F = np.eye(6)
+            P = np.diag([P0_ANGLE**2, P0_SPEED**2, P0_TORSION**2, P0_SPEED**2, p["jsf_p0_load"] ** 2,
+                         p["jsf_p0_load"] ** 2, P0_INERTIA**2])
+            F = np.eye(N_STATES)
         else:
             x, F = transition(p, x, i_m[k - 1])
             P = F @ P @ F.T + Q
         store["x_prior"].append(x.copy())
         store["P_prior"].append(P.copy())
         store["F"].append(F)
+        R = R0 + np.diag(REPEAT_WEIGHT * repeated[k] * quantisation)
         S = H @ P @ H.T + R
         K = P @ H.T @ np.linalg.inv(S)
         x = x + K @ (z - H @ x)

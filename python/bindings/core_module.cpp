@@ -116,7 +116,7 @@ public:
         for (std::size_t j = 0; j < n; ++j, ++rows_) {
             const double step_end = j + 1 < n ? time(j + 1) : end;
             std::string message;
-            const EstimatorStatus s = estimator_.advance_to(step_end, {i_m(j), theta_m(j), theta_l(j)}, &message, [&] {
+            const EstimatorStatus s = estimator_.advance_to(step_end, time(j), {i_m(j), theta_m(j), theta_l(j)}, &message, [&] {
                 const JointStateFilter& filter = estimator_.joint_filter();
                 if (keep_records_ && filter.started() && (records_ == 0 || filter.record().predicted)) {
                     keep(filter.record());
@@ -492,6 +492,8 @@ NB_MODULE(_core, m) {
     m.doc() = "hdjoint C++ core: the batch path (same code as the FMUs)";
     // The batch status column's value for a sample the joint-state filter rejected as an outlier.
     m.attr("STATUS_SAMPLE_REJECTED") = static_cast<int>(EstimatorStatus::SampleRejected);
+    // ... and for a sample without a new reading (a gap: its step held the inputs), predicted over.
+    m.attr("STATUS_READINGS_HELD") = static_cast<int>(EstimatorStatus::ReadingsHeld);
     // The columns of EstimatorStream's records (one joint-state filter sample, flat).
     m.attr("RECORD_VALUES") = kRecordValues;
     m.def("fmu_signals", &fmu_signals,

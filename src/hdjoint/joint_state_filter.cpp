@@ -61,7 +61,9 @@ bool JointSystemModel::derivative(const State& x, const Control& u, State* dx, J
     const double theta_m = q.N * (theta_l + x(kDelta)), omega_m = q.N * (omega_l + nu);
     const double scale = friction_drift_scale(u.t, q);
     const double NJm = q.N * q.Jm;
-    const double a_l = (T.tau - q.Bl * omega_l - q.mgl * std::sin(theta_l) - w) / q.Jl;
+    const double inertia = q.Jl * (1.0 + x(kInertiaError));
+    if (!(inertia > 0.0)) return false;
+    const double a_l = (T.tau - q.Bl * omega_l - q.mgl * std::sin(theta_l) - w) / inertia;
     const double a_m = (motor_torque(u.i_m, theta_m, u.t, q) - motor_friction(omega_m, q, scale) - T.tau / q.N) / NJm;
     (*dx)(kThetaL) = omega_l;
     (*dx)(kOmegaL) = a_l;
@@ -69,15 +71,17 @@ bool JointSystemModel::derivative(const State& x, const Control& u, State* dx, J
     (*dx)(kNu) = a_m - a_l;
     (*dx)(kLoad) = x(kLoadRate);
     (*dx)(kLoadRate) = 0.0;
+    (*dx)(kInertiaError) = 0.0;
 
     const double cog = cogging_on(q) ? cogging_slope(theta_m, q) : 0.0;  // d/d theta_m
     const double friction = coulomb_friction_slope(omega_m, q, scale) + q.Bm;  // d/d omega_m
     J->setZero();
     (*J)(kThetaL, kOmegaL) = 1.0;
-    (*J)(kOmegaL, kThetaL) = (T.d_theta_l - q.mgl * std::cos(theta_l)) / q.Jl;
-    (*J)(kOmegaL, kOmegaL) = -q.Bl / q.Jl;
-    (*J)(kOmegaL, kDelta) = T.d_delta / q.Jl;
-    (*J)(kOmegaL, kLoad) = -1.0 / q.Jl;
+    (*J)(kOmegaL, kThetaL) = (T.d_theta_l - q.mgl * std::cos(theta_l)) / inertia;
+    (*J)(kOmegaL, kOmegaL) = -q.Bl / inertia;
+    (*J)(kOmegaL, kDelta) = T.d_delta / inertia;
+    (*J)(kOmegaL, kLoad) = -1.0 / inertia;
+    (*J)(kOmegaL, kInertiaError) = -a_l * q.Jl / inertia;
     (*J)(kDelta, kNu) = 1.0;
     const double am_theta_l = (cog * q.N - T.d_theta_l / q.N) / NJm;
     const double am_speed = -friction * q.N / NJm;  // by omega_l and by nu
@@ -87,6 +91,7 @@ bool JointSystemModel::derivative(const State& x, const Control& u, State* dx, J
     (*J)(kNu, kDelta) = am_delta - (*J)(kOmegaL, kDelta);
     (*J)(kNu, kNu) = am_speed;
     (*J)(kNu, kLoad) = -(*J)(kOmegaL, kLoad);
+    (*J)(kNu, kInertiaError) = -(*J)(kOmegaL, kInertiaError);
     (*J)(kLoad, kLoadRate) = 1.0;
     return dx->allFinite() && J->allFinite();
 }
@@ -101,7 +106,7 @@ JointState JointSystemModel::step(const State& x, const Control& u, JointCovaria
     }
     // M = I - c*J, c = h/2. J's rows kThetaL, kDelta, kLoad are the
     // kinematic identities (d theta_l = omega_l, d delta = nu, d w = r) and
-    // row kLoadRate is zero, so M z = y reduces to a 2x2 system in
+    // rows kLoadRate and kInertiaError are zero, so M z = y reduces to a 2x2 system in
     // (z_omega_l, z_nu): solved in closed form (the same numbers as a general
     // LU up to round-off, at a fraction of its cost).
     using namespace joint_state;
@@ -114,10 +119,11 @@ JointState JointSystemModel::step(const State& x, const Control& u, JointCovaria
     auto solve = [&](const State& y) {
         State z;
         z(kLoadRate) = y(kLoadRate);
+        z(kInertiaError) = y(kInertiaError);
         z(kLoad) = y(kLoad) + c * z(kLoadRate);
         auto rhs = [&](int row) {
             return y(row) + c * (J(row, kThetaL) * y(kThetaL) + J(row, kDelta) * y(kDelta) + J(row, kLoad) * z(kLoad) +
-                                 J(row, kLoadRate) * z(kLoadRate));
+                                 J(row, kLoadRate) * z(kLoadRate) + J(row, kInertiaError) * z(kInertiaError));
         };
         const double r1 = rhs(kOmegaL), r3 = rhs(kNu);
         z(kOmegaL) = (a33 * r1 - a13 * r3) / det;
@@ -149,6 +155,7 @@ JointStateFilter::JointStateFilter(const Parameters& p) : p_(p) {
     Q_ = (a * a) * (G * G.transpose());
     Q_(kLoad, kLoad) = p.jsf_q_load * p.jsf_q_load;
     Q_(kLoadRate, kLoadRate) = p.jsf_q_load_rate * p.jsf_q_load_rate;
+    Q_(kInertiaError, kInertiaError) = kQInertiaError * kQInertiaError;
     // Floor quantisers: reading + q/2 is unbiased, variance q^2/12.
     const double qm = resolution(p.motor_counts), ql = resolution(p.link_counts);
     offset_m_ = 0.5 * qm;
@@ -156,6 +163,8 @@ JointStateFilter::JointStateFilter(const Parameters& p) : p_(p) {
     R_.setZero();
     R_(0, 0) = std::max(p.jsf_r_theta_m * p.jsf_r_theta_m + qm * qm / 12.0, kMinReadingVariance);
     R_(1, 1) = std::max(p.jsf_r_theta_l * p.jsf_r_theta_l + ql * ql / 12.0, kMinReadingVariance);
+    quantisation_m_ = qm * qm / 12.0;
+    quantisation_l_ = ql * ql / 12.0;
     JointState sd0;
     sd0(kThetaL) = kP0Angle;
     sd0(kOmegaL) = kP0Speed;
@@ -163,6 +172,7 @@ JointStateFilter::JointStateFilter(const Parameters& p) : p_(p) {
     sd0(kNu) = kP0Speed;
     sd0(kLoad) = p.jsf_p0_load;
     sd0(kLoadRate) = p.jsf_p0_load;  // per second
+    sd0(kInertiaError) = kP0InertiaError;
     const JointCovariance P0 = sd0.cwiseAbs2().asDiagonal();
     adapt_weight_ = p.jsf_load_adapt_time > 0.0 ? std::min(1.0, p.Ts / p.jsf_load_adapt_time) : 0.0;
     kalman_ = UnscentedKalmanFilter<kJointStates>(merwe_weights<kJointStates>(1.0, 2.0, 0.0), JointState::Zero(), P0);
@@ -187,6 +197,21 @@ double JointStateFilter::torque_variance(const JointTorque& T, const JointCovari
            T.d_delta * T.d_delta * P(kDelta, kDelta);
 }
 
+Matrix<2> JointStateFilter::reading_covariance(double theta_m, double theta_l) {
+    // A reading equal to the last one carries the same quantisation error
+    // (the angle stayed inside one count), not a fresh one: the k-th repeat's
+    // quantisation variance is (1 + kRepeatedReadingWeight*k) q^2/12, so n
+    // equal readings say about as much as ln(n)/kRepeatedReadingWeight fresh ones.
+    repeats_m_ = started_ && theta_m == last_m_ ? repeats_m_ + 1.0 : 0.0;
+    repeats_l_ = started_ && theta_l == last_l_ ? repeats_l_ + 1.0 : 0.0;
+    last_m_ = theta_m;
+    last_l_ = theta_l;
+    Matrix<2> R = R_;
+    R(0, 0) += kRepeatedReadingWeight * repeats_m_ * quantisation_m_;
+    R(1, 1) += kRepeatedReadingWeight * repeats_l_ * quantisation_l_;
+    return R;
+}
+
 double JointStateFilter::gate(const Vector<2>& z) const {
     // A filter told its readings are exact (no quantisation, no noise) has
     // NIS in the millions on a model error of a micro-radian: only an
@@ -197,12 +222,14 @@ double JointStateFilter::gate(const Vector<2>& z) const {
     return angle > kOutlierAngle ? kOutlierGate : std::numeric_limits<double>::infinity();
 }
 
-FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointInput& in) {
+FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointInput& in, double age) {
     using namespace joint_state;
+    measurement_.age = std::isfinite(age) ? age : 0.0;
     const bool readable = std::isfinite(theta_m) && std::isfinite(theta_l);
     const Vector<2> z(theta_m + offset_m_, theta_l + offset_l_);
     FilterStatus status = FilterStatus::Ok;
     UnscentedKalmanFilter<kJointStates>::Update<2> update;
+    const Matrix<2> R = readable ? reading_covariance(theta_m, theta_l) : R_;
     if (!started_) {
         if (!readable || !finite(in)) return FilterStatus::SampleRejected;  // nothing to start from
         // At rest, in static balance: the link load holds the torque the torsion shows.
@@ -217,7 +244,7 @@ FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointI
         record_.F.setIdentity();
         record_.x_prior = kalman_.state();
         record_.P_prior = kalman_.covariance();
-        update = kalman_.update(measurement_, z, R_);
+        update = kalman_.update(measurement_, z, R);
         accepted_ = in;
         started_ = true;
     } else {
@@ -226,7 +253,7 @@ FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointI
         status = kalman_.predict(system_, previous_, Q);
         record_.x_prior = kalman_.state();
         record_.P_prior = kalman_.covariance();
-        update = readable ? kalman_.update(measurement_, z, R_, gate(z)) : decltype(update){};
+        update = readable ? kalman_.update(measurement_, z, R, gate(z)) : decltype(update){};
         if (!readable || update.status == FilterStatus::SampleRejected) {
             // The current held since the last sample may be the outlier:
             // predict again with the last one that passed; if the readings
@@ -236,7 +263,7 @@ FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointI
             status = std::max(status, kalman_.predict(system_, accepted_, Q));
             record_.x_prior = kalman_.state();
             record_.P_prior = kalman_.covariance();
-            if (readable) update = kalman_.update(measurement_, z, R_, gate(z));
+            if (readable) update = kalman_.update(measurement_, z, R, gate(z));
             readings_rejected_ = readable && update.status == FilterStatus::SampleRejected;
             update.nis = rejected_nis;
             update.status = FilterStatus::SampleRejected;
@@ -249,6 +276,8 @@ FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointI
     }
     record_.x = kalman_.state();
     record_.P = kalman_.covariance();
+    if (finite(in)) current_change_ = std::fabs(in.i_m - previous_.i_m);
+    samples_held_ = 0.0;
     previous_ = finite(in) ? in : accepted_;
     record_.input = previous_;
 
@@ -268,8 +297,37 @@ FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointI
     return std::max(status, update.status);
 }
 
+void JointStateFilter::predict_without_reading(const JointInput& in) {
+    using namespace joint_state;
+    if (!started_) return;
+    samples_held_ += 1.0;
+    JointCovariance Q = process_noise();
+    const double a = p_.Kt * samples_held_ * current_change_ / (p_.N * p_.Jm);
+    Q(kDelta, kDelta) += a * a * std::pow(0.5 * p_.Ts * p_.Ts, 2);
+    Q(kDelta, kNu) += a * a * 0.5 * p_.Ts * p_.Ts * p_.Ts;
+    Q(kNu, kDelta) = Q(kDelta, kNu);
+    Q(kNu, kNu) += a * a * p_.Ts * p_.Ts;
+    kalman_.predict(system_, previous_, Q);
+    record_.x_prior = kalman_.state();
+    record_.P_prior = kalman_.covariance();
+    record_.predicted = true;
+    record_.F = kalman_.transition();
+    record_.x = kalman_.state();
+    record_.P = kalman_.covariance();
+    previous_ = finite(in) ? in : accepted_;
+    record_.input = previous_;
+    const JointTorque T = system_.torque(kalman_.state(), previous_);
+    if (T.valid) {
+        out_.tau = T.tau;
+        out_.tau_std = std::sqrt(std::max(torque_variance(T, kalman_.covariance()), 0.0));
+    }
+    out_.load = kalman_.state()(kLoad);
+    out_.nis = 0.0;  // no innovation
+}
+
 // [started, x (6), P (36, column-major), previous and accepted input (i_m, z, t each),
-//  outputs (tau, tau_std, load, nis), load noise scale, readings rejected]
+//  outputs (tau, tau_std, load, nis), load noise scale, readings rejected, current change, samples held,
+//  last readings (theta_m, theta_l), their repeats]
 void JointStateFilter::save(std::vector<double>* out) const {
     out->push_back(started_ ? 1.0 : 0.0);
     const JointState& x = kalman_.state();
@@ -278,14 +336,17 @@ void JointStateFilter::save(std::vector<double>* out) const {
     out->insert(out->end(), P.data(), P.data() + kJointStates * kJointStates);
     out->insert(out->end(), {previous_.i_m, previous_.z, previous_.t, accepted_.i_m, accepted_.z, accepted_.t,
                              out_.tau, out_.tau_std, out_.load, out_.nis, load_noise_scale_,
-                             readings_rejected_ ? 1.0 : 0.0});
+                             readings_rejected_ ? 1.0 : 0.0, current_change_, samples_held_, last_m_, last_l_,
+                             repeats_m_, repeats_l_});
 }
 
 bool JointStateFilter::load(const std::vector<double>& in, std::size_t* cursor) {
     if (in.size() < *cursor + kSavedSize) return false;
     const double* d = in.data() + *cursor;
     const double* r = d + 1 + kJointStates + kJointStates * kJointStates;
-    if ((d[0] != 0.0 && d[0] != 1.0) || (r[11] != 0.0 && r[11] != 1.0)) return false;
+    if ((d[0] != 0.0 && d[0] != 1.0) || (r[11] != 0.0 && r[11] != 1.0) || !(r[12] >= 0.0) || !(r[13] >= 0.0) ||
+        !(r[16] >= 0.0) || !(r[17] >= 0.0))
+        return false;
     started_ = d[0] == 1.0;
     std::copy(d + 1, d + 1 + kJointStates, kalman_.state().data());
     std::copy(d + 1 + kJointStates, d + 1 + kJointStates + kJointStates * kJointStates, kalman_.covariance().data());
@@ -294,6 +355,12 @@ bool JointStateFilter::load(const std::vector<double>& in, std::size_t* cursor) 
     out_ = {r[6], r[7], r[8], r[9]};
     load_noise_scale_ = r[10];
     readings_rejected_ = r[11] == 1.0;
+    current_change_ = r[12];
+    samples_held_ = r[13];
+    last_m_ = r[14];
+    last_l_ = r[15];
+    repeats_m_ = r[16];
+    repeats_l_ = r[17];
     *cursor += kSavedSize;
     return true;
 }

@@ -39,7 +39,7 @@ TorqueEstimator::TorqueEstimator(const Parameters& p, double start_time)
                                     Vector<2>::Zero(), P0);
 }
 
-EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* message) {
+EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* message, bool reading, double age) {
     if (!std::isfinite(in.i_m) || !std::isfinite(in.theta_m) || !std::isfinite(in.theta_l)) {
         if (message) *message = describe_input(in);
         return EstimatorStatus::InvalidInput;
@@ -64,6 +64,8 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
         return EstimatorStatus::Ok;
     }
 
+    if (!reading && samples_ > 0) return predict_held(in, c, message);
+
     FilterStatus predicted = FilterStatus::Ok;
     double speed = 0.0;  // the first sample has no previous angle: speed 0
     if (samples_ == 0) {
@@ -71,8 +73,10 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
         ukf_.covariance() = ukf_.initial_covariance();
     } else {
         predicted = ukf_.predict(system_, previous_u_, Q_);
-        speed = (c.theta_m - previous_theta_m_) / p_.Ts;
+        // Over the samples predicted without a reading since the last one too.
+        speed = (c.theta_m - previous_theta_m_) / (p_.Ts * static_cast<double>(1 + samples_held_));
     }
+    samples_held_ = 0;
     Vector<2> z;
     z << speed, c.torsion;
     const auto update = ukf_.update(measurement_, z, R_);
@@ -89,7 +93,8 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
     previous_theta_m_ = c.theta_m;
     // The joint-state filter on the same (delayed) angles, current and hysteresis torque.
     const double t = static_cast<double>(samples_) * p_.Ts;
-    const FilterStatus joint = joint_.step(c.theta_m, c.theta_l, {in.i_m, c.z, t});
+    // (The compliance model's delay line matches the current with earlier angles: their age is the row's.)
+    const FilterStatus joint = joint_.step(c.theta_m, c.theta_l, {in.i_m, c.z, t}, age);
     out_.tau_hat = joint_.output().tau;
     out_.tau_hat_std = consistent(joint_.output().tau_std, joint_.output().nis, p_.Ts, p_.std_nis_time, &nis_mean_hat_);
     out_.tau_load = joint_.output().load;
@@ -122,6 +127,40 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
             return EstimatorStatus::SampleRejected;
     }
     return EstimatorStatus::Ok;
+}
+
+EstimatorStatus TorqueEstimator::predict_held(const EstimatorInputs& in, const ComplianceSample& c,
+                                              std::string* message) {
+    const FilterStatus predicted = ukf_.predict(system_, previous_u_, Q_);
+    const Vector<2>& x = ukf_.state();
+    out_.tau_ukf = x(1);
+    out_.omega_m = x(0);
+    // The deviations widen with the prediction (the NIS means of std_nis_time hold: no innovation).
+    out_.tau_ukf_std = std::sqrt(std::max(ukf_.covariance()(1, 1), 0.0)) *
+                       (p_.std_nis_time > 0.0 ? std::sqrt(std::max(1.0, nis_mean_ukf_)) : 1.0);
+    out_.tau_compliance = c.tau;
+    out_.dtheta_f = c.dtheta_f;
+    out_.nis = 0.0;
+    out_.hysteresis_torque = c.z;
+    const double t = static_cast<double>(samples_) * p_.Ts;
+    joint_.predict_without_reading({in.i_m, c.z, t});
+    out_.tau_hat = joint_.output().tau;
+    out_.tau_hat_std = joint_.output().tau_std *
+                       (p_.std_nis_time > 0.0 ? std::sqrt(std::max(1.0, nis_mean_hat_)) : 1.0);
+    out_.tau_load = joint_.output().load;
+    previous_u_ = motor_torque(in.i_m, c.theta_m, t, p_) - coulomb_friction(x(0), p_, friction_drift_scale(t, p_));
+    ++samples_;
+    ++samples_held_;
+    (void)predicted;  // a reset covariance (non-finite P) is reported by the next reading's update
+    if (message) {
+        std::ostringstream s;
+        s.precision(6);
+        s << "gap: sample " << samples_ - 1 << " has no new reading (the inputs were held over "
+          << samples_held_ + 1 << " samples of Ts = " << p_.Ts
+          << " s); both filters predicted over it, tau_ukf_std and tau_hat_std grow";
+        *message = s.str();
+    }
+    return EstimatorStatus::ReadingsHeld;
 }
 
 void TorqueEstimator::show_start(const EstimatorInputs& in) {

@@ -29,11 +29,19 @@ struct EstimatorOutputs {
 // The rows of estimator_signals.def (value references: see there).
 const SignalTable<EstimatorInputs, EstimatorOutputs>& estimator_signals();
 
+// How old (in samples) the inputs of a step may be and still count as a
+// reading at a sample (advance_to). Measured by benchmarks/jitter_tolerance.py:
+// with a reading used only at a step's first sample, 10-80 % jitter made
+// tau_hat 18-40 % worse (a jittered row may hold two samples and the next
+// none, so a reading is lost); a reading up to 1.5 samples old keeps it.
+constexpr double kMaxReadingAge = 1.5;
+
 enum class EstimatorStatus {
     Ok,
     CovarianceRepaired,  // the UKF repaired an indefinite covariance (can go on)
     CovarianceReset,     // the UKF reset its covariance (can go on)
     UpdateSkipped,       // the measurement update was skipped (can go on)
+    ReadingsHeld,        // a gap: a step held its inputs over several samples; the filters predicted over the later ones
     SampleRejected,      // the joint-state filter rejected an outlier sample and predicted over it (can go on)
     SingularTorsion,     // |Cf*Kf*dtheta_f| >= pi/2: no torque explains the torsion
     InvalidInput,        // NaN or infinite input
@@ -56,20 +64,33 @@ public:
     void show_start(const EstimatorInputs& in);
 
     // Runs the samples due before `end` (see SampleClock) on the inputs `in`,
-    // held; `after_sample()` is called after each. Returns the worst status
-    // (StepTooLong, with nothing run, beyond the step bound) and the message
-    // of the first sample that was not Ok.
+    // held, which were read at `read_at` (the step's start); `after_sample()`
+    // is called after each. A sample takes the inputs as a reading while they
+    // are less than kMaxReadingAge samples old (jitter: a reading a little
+    // late is still the best one); a step that holds them longer (a gap in a
+    // recording, a communication step longer than Ts) is predicted over by
+    // both filters without readings (status ReadingsHeld; the deviations
+    // widen), never fed the same angles as if the joint had stopped. Returns
+    // the worst status (StepTooLong, with nothing run, beyond the step bound)
+    // and the message of the first sample that was not Ok.
     template <class AfterSample>
-    EstimatorStatus advance_to(double end, const EstimatorInputs& in, std::string* message, AfterSample after_sample);
-    EstimatorStatus advance_to(double end, const EstimatorInputs& in, std::string* message = nullptr) {
-        return advance_to(end, in, message, [] {});
+    EstimatorStatus advance_to(double end, double read_at, const EstimatorInputs& in, std::string* message,
+                               AfterSample after_sample);
+    EstimatorStatus advance_to(double end, double read_at, const EstimatorInputs& in,
+                               std::string* message = nullptr) {
+        return advance_to(end, read_at, in, message, [] {});
     }
 
     // Process one sample (inputs valid at this sample's time). `message`,
     // when given, names what went wrong for any status but Ok. With i_delay
     // the current is matched with the angles of round(i_delay/Ts) samples
     // before, and the first that many samples only fill the delay line.
-    EstimatorStatus step(const EstimatorInputs& in, std::string* message = nullptr);
+    // With `reading` false the angles are not a new reading (held since the
+    // last sample): the compliance model runs on them, the UKF and the
+    // joint-state filter only predict (ReadingsHeld).
+    // `age`: how long before this sample the inputs were read (s; a jittered row).
+    EstimatorStatus step(const EstimatorInputs& in, std::string* message = nullptr, bool reading = true,
+                         double age = 0.0);
 
     const EstimatorOutputs& outputs() const { return out_; }
     const Parameters& parameters() const { return p_; }
@@ -88,9 +109,11 @@ public:
     const JointStateFilter& joint_filter() const { return joint_; }
 
 private:
+    // A sample whose readings were held (see step): both filters predict.
+    EstimatorStatus predict_held(const EstimatorInputs& in, const ComplianceSample& c, std::string* message);
     // Outputs that show the compliance model only (before the filters start).
     void show_compliance(double tau, double dtheta_f);
-    static constexpr long kStateVersion = 5;  // 5: the NIS means of std_nis_time
+    static constexpr long kStateVersion = 6;  // 5: the NIS means of std_nis_time; 6: samples_held
 
     Parameters p_;
     PaperSystemModel system_;
@@ -106,17 +129,22 @@ private:
     // Running means of NIS/2 of the paper UKF and the joint-state filter (std_nis_time).
     double nis_mean_ukf_ = 1.0, nis_mean_hat_ = 1.0;
     long samples_ = 0;
+    long samples_held_ = 0;  // samples predicted without a reading since the last reading (the UKF's speed spans them)
     SampleClock clock_;
 };
 
 template <class AfterSample>
-EstimatorStatus TorqueEstimator::advance_to(double end, const EstimatorInputs& in, std::string* message,
-                                            AfterSample after_sample) {
+EstimatorStatus TorqueEstimator::advance_to(double end, double read_at, const EstimatorInputs& in,
+                                            std::string* message, AfterSample after_sample) {
     EstimatorStatus worst = EstimatorStatus::Ok;
     std::string first;
-    const bool bounded = clock_.run_until(end, [&](double) {
+    bool first_sample = true;
+    const bool bounded = clock_.run_until(end, [&](double t) {
         std::string m;
-        const EstimatorStatus s = step(in, &m);
+        // Within the sample clock's tolerance (a millionth of Ts) a reading is on time.
+        const double age = t - read_at > 1e-6 * p_.Ts ? t - read_at : 0.0;
+        const EstimatorStatus s = step(in, &m, first_sample || age < kMaxReadingAge * p_.Ts, age);
+        first_sample = false;
         if (s != EstimatorStatus::Ok && first.empty()) first = m;
         worst = std::max(worst, s);
         if (!recoverable(s)) return false;
@@ -134,6 +162,7 @@ bool TorqueEstimator::fields(Archive& a) {
     return a("estimator_state_version", version, kStateVersion, kStateVersion) && a("ukf_state", ukf_.state()) &&
            a("ukf_covariance", ukf_.covariance()) && a("previous_theta_m", previous_theta_m_) &&
            a("previous_u", previous_u_) && a("nis_mean_ukf", nis_mean_ukf_) && a("nis_mean_hat", nis_mean_hat_) &&
+           a("samples_held", samples_held_) &&
            output_fields(a, estimator_signals(), out_) &&
            a.part("compliance_model", compliance_) && a.part("joint_state_filter", joint_) &&
            a("samples", samples_) && clock_.fields(a);

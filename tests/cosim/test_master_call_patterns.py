@@ -153,7 +153,9 @@ def test_changing_step_sizes_agree_on_the_common_grid(name):
     """Steps of 1, 0.5+0.5, 2, 0.3+0.7 and 5 ms in turn (every partition
     boundary on the 1 ms grid is hit), against 1 ms steps with the same
     held inputs. The samplers take their samples at k*Ts with the inputs of
-    the step that holds them: equal to 1e-12 relative. The plant integrates fixed substeps of
+    the step that holds them: equal to 1e-12 relative (the estimator's
+    filters read them at the step's first sample only: its reference keeps
+    the steps that hold samples). The plant integrates fixed substeps of
     max_step = 0.1 ms, and every step here is a multiple of it: the same
     substeps, so the same trajectory to round-off (1e-9 of each signal's
     range), its quantised encoders within one count (round-off can move a
@@ -189,18 +191,29 @@ def test_changing_step_sizes_agree_on_the_common_grid(name):
     finally:
         r.close()
     # The reference steps on the plant's substep grid (0.1 ms) for the
-    # plant, on the sample grid (1 ms) for the samplers.
+    # plant, on the sample grid (1 ms) for the controller: (start, step) pairs.
     fine = 10 if name == "HarmonicDriveJoint" else 1
+    steps = [(k * H / fine, H / fine) for k in range(400 * fine)]
+    if name == "JointTorqueEstimator":
+        # The estimator's filters read the inputs at a step's first sample only and predict over
+        # the others (a step of 2 or 5 ms is a gap to them): its reference keeps those steps
+        # and merges each step that holds no sample (the 0.5 and 0.3 ms ones) into the one before.
+        grid = lambda t: math.ceil(t / H - 1e-6)  # noqa: E731 - the first sample at or after t
+        kept = [p for p, q in zip(points[:-1], points[1:]) if grid(p) < grid(q)] + [points[-1]]
+        assert len(kept) < len(points) - 50  # steps without a sample were merged
+        steps = [(t0, t1 - t0) for t0, t1 in zip(kept[:-1], kept[1:])]
     ref_run = Run(name, "reference")
     try:
         ref = {}
-        for k in range(400 * fine):
-            ref_run.s.setReal(ref_run.vin, held(k * H / fine))
-            ref_run.fmu.call("fmi2DoStep", ref_run.s.doStep, k * H / fine, H / fine)
-            if (k + 1) % fine == 0 and (k + 1) // fine in out:
-                ref[(k + 1) // fine] = ref_run.s.getReal(ref_run.vout)
+        for t0, h in steps:
+            ref_run.s.setReal(ref_run.vin, held(t0))
+            ref_run.fmu.call("fmi2DoStep", ref_run.s.doStep, t0, h)
+            k = int(round((t0 + h) / H))
+            if abs((t0 + h) / H - k) < 1e-9 and k in out:
+                ref[k] = ref_run.s.getReal(ref_run.vout)
     finally:
         ref_run.close()
+    out = {k: v for k, v in out.items() if k in ref}
     keys = sorted(out)
     got, want = np.array([out[k] for k in keys]), np.array([ref[k] for k in keys])
     assert len(keys) > 100

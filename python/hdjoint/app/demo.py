@@ -37,7 +37,7 @@ def run_demo(out: Path) -> None:
     write_csv(out / "paper_estimates.csv", {"time": rec.time, **est})
     fmu_check = error_figures(est["tau_ukf"], rec.extra["tau_joint"])
 
-    _say("[4/5] the paper's table: compliance model vs UKF (default and fairly tuned)")
+    _say("[4/5] the paper's table: compliance model vs UKF (default and fairly tuned), tau_hat, tau_smooth")
     table = reproduce(rec)
     (out / "paper_table.md").write_text(table.markdown() + "\n")
     plots.save(plots.torque_comparison(rec.time, table.estimates, "Paper experiment: estimates vs true torque"),

@@ -21,23 +21,33 @@ def warn_fmu_messages(path, messages) -> None:
 
 
 class RejectedSamples:
-    """The samples the joint-state filter predicted over as outliers (the batch status column), to say where."""
+    """The rows whose step the filters predicted over (the batch status column): outliers the joint-state
+    filter rejected, and gaps (a step that held its inputs over several samples), to say where."""
 
     def __init__(self, path):
-        self.path, self.count, self.first = path, 0, []
+        self.path = path
+        self.count, self.first = {"rejected": 0, "held": 0}, {"rejected": [], "held": []}
 
     def add(self, time, status) -> None:
         from hdjoint import _core
-        rejected = np.flatnonzero(np.asarray(status) == _core.STATUS_SAMPLE_REJECTED)
-        self.count += rejected.size
-        self.first += [float(time[j]) for j in rejected[:SHOWN_WARNINGS - len(self.first)]]
+        status = np.asarray(status)
+        for kind, code in (("rejected", _core.STATUS_SAMPLE_REJECTED), ("held", _core.STATUS_READINGS_HELD)):
+            rows = np.flatnonzero(status == code)
+            self.count[kind] += rows.size
+            self.first[kind] += [float(time[j]) for j in rows[:SHOWN_WARNINGS - len(self.first[kind])]]
+
+    def _where(self, kind) -> str:
+        more = ", ..." if self.count[kind] > len(self.first[kind]) else ""
+        return f"{', '.join(f'{t:g} s' for t in self.first[kind])}{more}"
 
     def warn(self) -> None:
-        if self.count:
-            more = ", ..." if self.count > len(self.first) else ""
-            print(f"warning: {self.path}: the joint-state filter rejected {self.count} outlier sample(s) and "
-                  f"predicted over them (at {', '.join(f'{t:g} s' for t in self.first)}{more}); tau_hat_std grows "
-                  "there", file=sys.stderr)
+        if self.count["rejected"]:
+            print(f"warning: {self.path}: the joint-state filter rejected {self.count['rejected']} outlier sample(s) "
+                  f"and predicted over them (at {self._where('rejected')}); tau_hat_std grows there", file=sys.stderr)
+        if self.count["held"]:
+            print(f"warning: {self.path}: {self.count['held']} row(s) step over more than one sample (a gap, at "
+                  f"{self._where('held')}): the filters predicted over the samples without a reading; "
+                  "tau_ukf_std and tau_hat_std grow there", file=sys.stderr)
 
 
 class FmuEngine:

@@ -33,6 +33,8 @@ class PaperTable:
     ukf_tuned: ErrorFigures
     tuned_settings: dict
     estimates: dict  # name -> torque array
+    tau_hat: ErrorFigures | None = None     # the joint-state filter (beyond the paper), same settings
+    tau_smooth: ErrorFigures | None = None  # its RTS smoother
 
     def rows(self):
         yield "paper: compliance model", PAPER_COMPLIANCE, None
@@ -40,6 +42,10 @@ class PaperTable:
         yield "hdjoint: compliance model", self.compliance, None
         yield "hdjoint: UKF, default settings", self.ukf_default, self.ukf_default.reduction_against(self.compliance)
         yield "hdjoint: UKF, tuned on this run", self.ukf_tuned, self.ukf_tuned.reduction_against(self.compliance)
+        for name, fig in (("hdjoint: tau_hat (joint-state filter)", self.tau_hat),
+                          ("hdjoint: tau_smooth (its smoother, offline)", self.tau_smooth)):
+            if fig is not None:
+                yield name, fig, fig.reduction_against(self.compliance)
 
     def markdown(self) -> str:
         lines = ["| estimate | RMS error (N.m) | max error (N.m) | RMS change vs compliance |",
@@ -50,8 +56,9 @@ class PaperTable:
         return "\n".join(lines)
 
 
-def _ukf(params, rec):
-    return _core.run_estimator(parameters.for_estimator(params), rec.time, rec.i_m, rec.theta_m, rec.theta_l)
+def _ukf(params, rec, smooth=False):
+    return _core.run_estimator(parameters.for_estimator(params), rec.time, rec.i_m, rec.theta_m, rec.theta_l,
+                               smooth=smooth)
 
 
 def reproduce(rec: Recording, params: dict[str, float] | None = None, reference=None) -> PaperTable:
@@ -62,7 +69,7 @@ def reproduce(rec: Recording, params: dict[str, float] | None = None, reference=
         reference = rec.extra.get("tau_joint", rec.tau_sensor)
     if reference is None:
         raise ValueError("the recording has neither tau_joint nor tau_sensor to compare against")
-    base = _ukf(params, rec)
+    base = _ukf(params, rec, smooth=True)
     best = None
     for values in itertools.product(*TUNING_GRID.values()):
         trial = dict(params, **dict(zip(TUNING_GRID, values)))
@@ -74,5 +81,6 @@ def reproduce(rec: Recording, params: dict[str, float] | None = None, reference=
         compliance=error_figures(base["tau_compliance"], reference),
         ukf_default=error_figures(base["tau_ukf"], reference),
         ukf_tuned=best[0], tuned_settings=best[1],
+        tau_hat=error_figures(base["tau_hat"], reference), tau_smooth=error_figures(base["tau_smooth"], reference),
         estimates={"reference": np.asarray(reference), "tau_compliance": base["tau_compliance"],
                    "tau_ukf (default)": base["tau_ukf"], "tau_ukf (tuned)": best[2]})
