@@ -48,7 +48,7 @@ def fmi3_system(ssp: Path, out: Path) -> Path:
 def run_master(master: str, ssp: Path, out: Path) -> dict[str, np.ndarray]:
     call = {"ecos": f"cosim.run_ecos(sys.argv[1], {STOP['ecos']}, {STEP})",
             "maestro": f"cosim.run_maestro(sys.argv[1], {STOP['maestro']}, {STEP}, cosim.maestro_jar())"}[master]
-    code = f"import sys; from hdjoint import cosim; {call}.save(sys.argv[2])"
+    code = f"import sys; from hdjoint.fmu import cosim; {call}.save(sys.argv[2])"
     proc = subprocess.run([sys.executable, "-c", code, str(ssp), str(out)], capture_output=True, text=True,
                           timeout=900)
     assert proc.returncode == 0, proc.stderr[-3000:]

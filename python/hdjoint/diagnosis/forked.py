@@ -34,8 +34,11 @@ def _run(index: int):
 
 def _quiet_on_ctrl_c() -> None:
     """In a child: Ctrl-C (SIGINT to the whole process group) is the parent's to handle; the pool then
-    ends its children (without this, each printed a KeyboardInterrupt traceback)."""
+    ends its children (without this, each printed a KeyboardInterrupt traceback). SIGTERM, which the
+    pool ends its children with, kills at once: a handler inherited from the parent (the command
+    line's) runs only between bytecodes, and a child blocked in C never reached one."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 def map_forked(piece: Callable[[int], T], count: int, workers: int | None = None) -> list[T]:

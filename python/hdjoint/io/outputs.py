@@ -86,25 +86,18 @@ def sweep_debris(path) -> list[str]:
     staging folders, whose writer's pid is no longer running); returns them."""
     path = os.path.abspath(os.fspath(path))
     directory, name = os.path.split(path)
-    pattern = re.compile(rf"\.{re.escape(name)}\.(\d+)\.[0-9a-f]+\.tmp\Z")
-    removed = []
-    try:
-        entries = os.listdir(directory)
-    except OSError:
-        return removed
-    for entry in entries:
-        m = pattern.match(entry)
-        if m and not _alive(int(m.group(1))):
-            _remove(os.path.join(directory, entry))
-            removed.append(entry)
-    return removed
+    return _sweep(directory, re.compile(rf"\.{re.escape(name)}\.(\d+)\.[0-9a-f]+\.tmp\Z"))
 
 
 def sweep_temp_dirs(prefix: str, directory: str | None = None) -> list[str]:
     """Remove folders PREFIX-PID-* in DIRECTORY (default: the temporary
     directory) whose pid is no longer running: what a killed run left."""
     directory = directory or tempfile.gettempdir()
-    pattern = re.compile(rf"{re.escape(prefix)}-(\d+)-")
+    return _sweep(directory, re.compile(rf"{re.escape(prefix)}-(\d+)-"))
+
+
+def _sweep(directory: str, pattern) -> list[str]:
+    """Remove the entries of DIRECTORY that PATTERN matches whose pid (its group 1) is no longer running."""
     removed = []
     try:
         entries = os.listdir(directory)

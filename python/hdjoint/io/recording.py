@@ -446,9 +446,16 @@ class CsvWriter:
             fd = os.open(self._tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
         except OSError as exc:
             raise write_error(self.path, exc) from None
-        self._file = open(fd, "w", newline="", encoding="utf-8")
-        self._writer = csv.writer(self._file, lineterminator="\n")
-        self._guard(self._writer.writerow, self.names)
+        try:  # from here the temporary file is ours to remove, even if a signal stops us before `with` is entered
+            self._file = open(fd, "w", newline="", encoding="utf-8")
+            self._writer = csv.writer(self._file, lineterminator="\n")
+            self._guard(self._writer.writerow, self.names)
+        except BaseException:
+            if not hasattr(self, "_file"):
+                os.close(fd)
+                self._file = None
+            self.discard()
+            raise
 
     def _guard(self, fn, *args):
         try:
@@ -482,7 +489,8 @@ class CsvWriter:
 
     def discard(self) -> None:
         try:
-            self._file.close()  # flushes: on a full disk this fails too, and the file goes all the same
+            if self._file is not None:
+                self._file.close()  # flushes: on a full disk this fails too, and the file goes all the same
         except OSError:
             pass
         try:
