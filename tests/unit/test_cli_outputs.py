@@ -45,6 +45,14 @@ def _temp_files(directory: Path, name: str):
     return [p for p in directory.iterdir() if p.name.startswith(f".{name}.") and p.name.endswith(".tmp")]
 
 
+def _size(path: Path) -> int:
+    """Bytes in a file, or files in a folder; 0 once it is gone (the run may remove it any time)."""
+    try:
+        return len(list(path.iterdir())) if path.is_dir() else path.stat().st_size
+    except FileNotFoundError:
+        return 0
+
+
 def _start(*argv, env=None):
     return subprocess.Popen([*CLI, *map(str, argv)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             env=env)
@@ -162,9 +170,10 @@ def test_a_second_run_on_the_same_output_is_refused_while_the_first_runs(long_cs
 def test_an_interrupted_estimate_leaves_nothing_and_says_so_in_one_line(long_csv, tmp_path, sig, code, word):
     out = tmp_path / "est.csv"
     proc = _start("estimate", long_csv, "-o", out)
-    _wait_for(lambda: _temp_files(tmp_path, out.name), proc=proc)
+    # Mid-run: rows are being written (a signal inside a constructor is another, narrower case).
+    _wait_for(lambda: [p for p in _temp_files(tmp_path, out.name) if _size(p) > 65536], proc=proc)
     rc, err = _signal_stopped(proc, sig)
-    assert rc == code
+    assert rc == code, err
     assert "Traceback" not in err
     assert_one_line_error(err, "hdjoint estimate:", word)
     assert files_in(tmp_path) == []
@@ -174,9 +183,10 @@ def test_a_terminated_smoothing_run_leaves_nothing_in_tmpdir(long_csv, tmp_path)
     out, tmp = tmp_path / "est.csv", tmp_path / "tmp"
     tmp.mkdir()
     proc = _start("estimate", long_csv, "--smooth", "-o", out, env={**os.environ, "TMPDIR": str(tmp)})
-    _wait_for(lambda: [p for p in tmp.iterdir() if p.name.startswith("hdjoint-smooth-")], proc=proc)
+    # Mid-run: the smoother's records are being written.
+    _wait_for(lambda: [p for p in tmp.iterdir() if p.name.startswith("hdjoint-smooth-") and _size(p)], proc=proc)
     rc, err = _signal_stopped(proc, signal.SIGTERM)
-    assert rc == 143 and "Traceback" not in err
+    assert rc == 143 and "Traceback" not in err, err
     assert files_in(tmp) == [] and files_in(tmp_path) == ["tmp"]
 
 
