@@ -325,7 +325,7 @@ void JointStateFilter::predict_without_reading(const JointInput& in) {
     out_.nis = 0.0;  // no innovation
 }
 
-// [started, x (6), P (36, column-major), previous and accepted input (i_m, z, t each),
+// [started, x (kJointStates), P (kJointStates^2, column-major), previous and accepted input (i_m, z, t each),
 //  outputs (tau, tau_std, load, nis), load noise scale, readings rejected, current change, samples held,
 //  last readings (theta_m, theta_l), their repeats]
 void JointStateFilter::save(std::vector<double>* out) const {

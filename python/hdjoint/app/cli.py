@@ -13,6 +13,7 @@ import sys
 
 from hdjoint.io.outputs import OutputError
 from hdjoint.jobs.inputs import UserError, check_output_file, locked_output, read_params as _params
+from hdjoint.fleet.cli import whole_number
 from hdjoint.io.timebase import TIME_UNITS
 
 DESCRIPTION = ("Torque sensing for harmonic-drive robot joints: FMUs, simulation, torque estimation, diagnosis, "
@@ -118,16 +119,6 @@ def _time_unit_argument(p) -> None:
                         "and 2); it is negated as it is read (default: 1)")
 
 
-def _seed(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be 0 or more, not {value}")
-    return value
-
-
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="hdjoint", description=DESCRIPTION)
     sub = ap.add_subparsers(dest="command", required=True)
@@ -146,7 +137,7 @@ def build_parser() -> argparse.ArgumentParser:
                                    "(default: the nominal set with realistic deviations)")
     p.add_argument("--duration", type=float,
                    help=f"seconds, from {MIN_DURATION:g} to the experiment's length (default: the whole experiment)")
-    p.add_argument("--seed", type=_seed, default=1, help="seed of the sensor noise (an integer >= 0; default 1)")
+    p.add_argument("--seed", type=whole_number(0), default=1, help="seed of the sensor noise (an integer >= 0; default 1)")
     p.add_argument("-o", "--output", required=True, help="recording to write (CSV)")
     p.set_defaults(run=cmd_simulate)
 

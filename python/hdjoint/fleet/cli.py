@@ -61,15 +61,19 @@ def cmd_generate(args) -> int:
     return 0
 
 
-def _positive_int(text: str) -> int:
+def whole_number(least: int):
+    """An argparse type: an integer of at least LEAST, refused with a one-line reason otherwise."""
     import argparse
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, not {value}")
-    return value
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+        if value < least:
+            raise argparse.ArgumentTypeError(f"must be at least {least}, not {value}")
+        return value
+    return parse
 
 
 def register(sub) -> None:
@@ -86,7 +90,7 @@ def register(sub) -> None:
     p.set_defaults(run=cmd_fleet)
     p = fsub.add_parser("generate", help="simulate a fleet with known drifts (for trying the fleet commands)")
     p.add_argument("out", help="target directory")
-    p.add_argument("--joints", type=_positive_int, default=4, help="number of joints (default: 4)")
-    p.add_argument("--days", type=_positive_int, default=6, help="recordings per joint, one a day (default: 6)")
+    p.add_argument("--joints", type=whole_number(1), default=4, help="number of joints (default: 4)")
+    p.add_argument("--days", type=whole_number(1), default=6, help="recordings per joint, one a day (default: 6)")
     p.add_argument("--duration", type=float, default=20.0, help="seconds per recording (default: 20)")
     p.set_defaults(run=cmd_generate)
