@@ -67,6 +67,19 @@ DOMINANT_GAIN = 0.30
 # An order stands out of its off-orders' floor by this factor.
 ORDER_PROMINENCE = 3.0
 
+# --- The verdict's absolute yardstick (floors.py) ------------------------------
+# The accuracy a model must reach, by default, as a share of the torque span:
+# torque estimators and sensors of this class state a few % of their range.
+ACCURACY_SHARE = 0.05
+# A model missing more than this share of the torque span is never
+# `consistent`, whatever accuracy is stated (issue 38).
+MAX_MISS_SHARE = 0.10
+# The torque span: between these percentiles of the torque the joint carries
+# (the extremes of a real log hold spikes).
+TORQUE_SPAN_PERCENTILES = (2.0, 98.0)
+# A standstill long enough to measure a sensor's scatter at (samples).
+STANDSTILL_SAMPLES = 50
+
 # --- Calibration ----------------------------------------------------------
 RESIZE_Z = 3.0          # |estimate - nominal| / tolerance beyond which a parameter counts as resized
 IDENTIFIED_RATIO = 0.5  # posterior std / prior std below which the recording identifies a parameter
