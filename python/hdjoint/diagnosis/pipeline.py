@@ -23,7 +23,7 @@ from hdjoint.diagnosis.findings import document, remaining_structure
 from hdjoint.diagnosis.floors import accuracy
 from hdjoint.diagnosis.open_library import propose_terms
 from hdjoint.diagnosis.prepare import prepare
-from hdjoint.diagnosis.resize import resized
+from hdjoint.diagnosis.resize import released, resized
 from hdjoint.diagnosis.results import DiagnosisResult
 from hdjoint.diagnosis.search import HypothesisSearch
 from hdjoint.diagnosis.select import select, unconfirmed_structure
@@ -58,6 +58,13 @@ def _diagnose(rec, nominal, progress, tolerance, workers, stated_accuracy=None, 
     calibration = calibration_table(objective, selection.last_fit, p)
     setup.say("checking what remains")
     resized_findings, unattributed = resized(objective, selection, calibration)
+    gross = released(objective, selection, calibration, {c.name for f in resized_findings for c in f.resized})
+    if gross.selection is not selection:  # the corrected set carries a released estimate
+        selection = gross.selection
+        p = selection.params
+        calibration = calibration_table(objective, selection.last_fit, p)
+    resized_findings += gross.findings
+    unattributed += gross.unexplained
     setup.say("measuring the smallest size of each untold effect this recording would show")
     limits = detection_limits(search, selection, {e for f in selection.findings + resized_findings
                                                   for e in f.named()})

@@ -81,6 +81,14 @@ TORQUE_SPAN_PERCENTILES = (2.0, 98.0)
 STANDSTILL_SAMPLES = 50
 
 # --- Calibration ----------------------------------------------------------
+# Parameters a user often takes from another joint (a catalogue's stiffness, a
+# CAD link model) and may have off by a factor, not by a tolerance: with their
+# tolerance as prior, the calibration holds them near a grossly wrong nominal
+# value (issue 38: mgl 4 N.m on an arm whose torque swings over 190 N.m). The
+# resize stage refits them with the prior GROSS_FACTOR times the nominal value
+# wide (resize.released).
+GROSS_CHECKED = ("mgl", "Jl", "Kf")
+GROSS_FACTOR = 25.0
 RESIZE_Z = 3.0          # |estimate - nominal| / tolerance beyond which a parameter counts as resized
 IDENTIFIED_RATIO = 0.5  # posterior std / prior std below which the recording identifies a parameter
 INTERVAL = 0.95         # every fitted parameter's interval
