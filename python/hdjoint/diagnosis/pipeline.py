@@ -57,13 +57,14 @@ def _diagnose(rec, nominal, progress, tolerance, workers, stated_accuracy=None, 
     p = selection.params
     calibration = calibration_table(objective, selection.last_fit, p)
     setup.say("checking what remains")
-    resized_findings, unattributed = resized(objective, selection, calibration)
-    gross = released(objective, selection, calibration, {c.name for f in resized_findings for c in f.resized})
+    gross = released(objective, selection, calibration)  # a link model far off, before the priors hold it short
     if gross.selection is not selection:  # the corrected set carries a released estimate
         selection = gross.selection
         p = selection.params
         calibration = calibration_table(objective, selection.last_fit, p)
-    resized_findings += gross.findings
+    settled = {c.name for f in gross.findings for c in f.resized} | {u["parameter"] for u in gross.unexplained}
+    resized_findings, unattributed = resized(objective, selection, calibration, settled)
+    resized_findings = sorted(gross.findings + resized_findings, key=lambda f: f.p_value)
     unattributed += gross.unexplained
     setup.say("measuring the smallest size of each untold effect this recording would show")
     limits = detection_limits(search, selection, {e for f in selection.findings + resized_findings

@@ -24,18 +24,18 @@ from hdjoint.diagnosis.structure import held_out_gain_sq
 from hdjoint.io import parameters
 
 
-def resized(objective: Objective, selection: Selection,
-            calibration: dict[str, Calibrated]) -> tuple[list[Finding], list[dict]]:
+def resized(objective: Objective, selection: Selection, calibration: dict[str, Calibrated],
+            settled: set[str] = frozenset()) -> tuple[list[Finding], list[dict]]:
     """The resized findings at the selection's set, and as unexplained
     structure the needed moves of harmonics the recording's travel does not
     resolve (unresolved_harmonics). The held fit starts at the edge of the
-    band (RESIZE_Z tolerances)."""
+    band (RESIZE_Z tolerances). Parameters `settled` (by `released`) are not tested again."""
     p = selection.params
     moved: dict[tuple[str, bool], list[Calibrated]] = {}
     unresolved = unresolved_harmonics(objective.rec, p)
     for c in calibration.values():
         effect = owner(c.name)
-        if effect is not None and c.beyond_tolerance:
+        if effect is not None and c.beyond_tolerance and c.name not in settled:
             moved.setdefault((effect.id, c.name in unresolved), []).append(c)
     out, unattributed = [], []
     for (effect_id, is_unresolved), params in moved.items():
@@ -101,19 +101,19 @@ class Released:
     selection: Selection
 
 
-def released(objective: Objective, selection: Selection, calibration: dict[str, Calibrated],
-             resized_already: set[str] = frozenset()) -> Released:
+def released(objective: Objective, selection: Selection, calibration: dict[str, Calibrated]) -> Released:
     """Parameters of GROSS_CHECKED a nominal set may have off by a factor:
     refitted with their prior GROSS_FACTOR times the nominal value wide.
     One that lands beyond RESIZE_Z tolerances there (or already did in the
-    calibration and was not found resized there) is tested as `resized` tests:
+    calibration, where the prior may have held it short) is tested as `resized` tests:
     held at the edge of its tolerance, the rest refitted, the model must
     predict held-out data worse (compared at the noise as measured). A
     needed one is a resized finding of its owner with the released
     estimate and interval, or, owned by none, unexplained structure with
-    its size in N.m; the corrected set takes the released estimate."""
+    its size in N.m; the corrected set takes the released estimate. It runs
+    before `resized`, which then leaves these parameters alone."""
     p = selection.params
-    names = [n for n in GROSS_CHECKED if n in calibration and n not in resized_already]
+    names = [n for n in GROSS_CHECKED if n in calibration]
     if not names:
         return Released([], [], selection)
     free = list(dict.fromkeys(objective.calibrated_names + selection.added_names))
