@@ -68,7 +68,7 @@ def test_the_first_round_keeps_every_input_of_the_acceptance_rule():
               "folds_improved": "12/13", "worst_channel_ratio": 0.98, "degenerate": "a dead zone", "accepted": False,
               "not an input": 1}
     doc = {"verdict": "consistent", "findings": [], "hypotheses_tested": [[tested]]}
-    first = bench._summary(doc)["first_round"][0]
+    first = bench.summary(doc)["first_round"][0]
     assert first == {k: v for k, v in tested.items() if k != "not an input"}
 
 
