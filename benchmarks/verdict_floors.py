@@ -12,7 +12,7 @@ and the calibration costs a fraction of the whole diagnosis. The
 whole diagnosis's other reasons for alarming on the same controls are in
 diagnosis_independent.md and sensorless_controls.md.
 
-Run: python benchmarks/verdict_floors.py [--seeds 4] [--workers 1] [--sensor yes|no|both]
+Run: python benchmarks/verdict_floors.py [--seeds 4] [--first-seed 0] [--workers 1] [--sensor yes|no|both] [--table-only]
 writes docs/results/verdict_floors.md (and .jsonl, the raw rows; resumable)."""
 from __future__ import annotations
 
@@ -108,7 +108,12 @@ def main() -> None:
     parser.add_argument("--first-seed", type=int, default=0)
     parser.add_argument("--workers", type=int, default=1)
     parser.add_argument("--sensor", choices=("yes", "no", "both"), default="both")
+    parser.add_argument("--table-only", action="store_true", help="rebuild the table from the rows written so far")
     args = parser.parse_args()
+    if args.table_only:
+        rows = independent.load_results(RESULTS, KEY)
+        print(write_table(sorted(rows, key=lambda r: (not r["sensor"], r["case"], r["seed"], r["run"]))))
+        return
     sensors = {"yes": (True,), "no": (False,), "both": (True, False)}[args.sensor]
     jobs = []
     for seed in range(args.first_seed, args.first_seed + args.seeds):
