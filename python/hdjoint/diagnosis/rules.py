@@ -86,7 +86,8 @@ STANDSTILL_SAMPLES = 50
 # tolerance as prior, the calibration holds them near a grossly wrong nominal
 # value (issue 38: mgl 4 N.m on an arm whose torque swings over 190 N.m). The
 # resize stage refits them with the prior GROSS_FACTOR times the nominal value
-# wide (resize.released).
+# wide (resize.released); an estimate beyond GROSS_FACTOR times the nominal
+# value either way is another part, not a mis-sized one.
 GROSS_CHECKED = ("mgl", "Jl", "Kf")
 GROSS_FACTOR = 25.0
 RESIZE_Z = 3.0          # |estimate - nominal| / tolerance beyond which a parameter counts as resized
