@@ -73,6 +73,9 @@ def run_joint(joint: str, files: list[str], data: Path, tmp: Path) -> list[dict]
         shipped = _diagnose(rec, n, tmp, f"{joint}-{k}-example", parameters.load(EXAMPLES[joint]))
         row["with_example_parameters"] = {"verdict": shipped["verdict"],
                                           "kinematic_error_says": kinematic_error_says(shipped)}
+        row["yardstick"] = {"the table's set": yardstick(doc), "examples/lara8": yardstick(shipped)}
+        for label, nominal in small_joint_sets(n).items():
+            row["yardstick"][label] = yardstick(_diagnose(rec, n, tmp, f"{joint}-{k}-{len(row['yardstick'])}", nominal))
         fitted = rec
         if len(recs) > 1:
             other = recs[1 - k]
@@ -111,6 +114,29 @@ def torsion_alone(name: str, rec, fitted, other, n: int) -> dict:
     return {"named": [{k: o[k] for k in ("order", "amplitude", "half_width", "gain", "z", "p")} for o in named],
             "says": lara8_kinematic.can_say(found),
             "closure": lara8_kinematic.closure(fitted, other, n, [o["order"] for o in named] or [2.0, 4.0])}
+
+
+def small_joint_sets(n: float) -> dict[str, dict]:
+    """Nominal sets a user may bring to a LARA8 joint (issue 38): the contract's
+    defaults (a small joint: Kf 10000, Cf 0.0645, mgl 5 N.m) with the ratio and
+    Kt, and the catalogue's stiffness with that small joint's link model and no eq. (7)."""
+    defaults = dict(parameters.defaults(), N=n, Kt=KT)
+    return {"contract defaults (N, Kt)": defaults,
+            "catalogue stiffness, mgl 5, no eq. (7)": dict(defaults, Kf=K1, Cf=catalogue_cf(),
+                                                             **{k: 0.0 for k in KINEMATIC_EQ7})}
+
+
+def yardstick(doc: dict) -> dict:
+    """The verdict, its findings, and each channel's held-out miss beyond the sensors' floor (N.m, share of the span)."""
+    accuracy = doc.get("accuracy") or {}
+    return {"verdict": doc["verdict"], "findings": [f"{f['effect']} ({f['kind']})" for f in doc["findings"]],
+            "span": accuracy.get("torque_span"), "allowed": accuracy.get("allowed"),
+            "miss": {ch: [c["miss"], c["miss_share_of_span"]] for ch, c in accuracy.get("channels", {}).items()}}
+
+
+def _yardstick_cell(y: dict) -> str:
+    miss = ", ".join(f"{ch} {m:.3g} N.m ({100 * share:.0f} %)" for ch, (m, share) in y["miss"].items())
+    return f"{y['verdict']}" + (f" ({'; '.join(y['findings'])})" if y["findings"] else "") + f"; miss: {miss}"
 
 
 def _torsion_cells(r: dict) -> list[str]:
@@ -194,6 +220,14 @@ def write_table(rows: list[dict], path: Path = TABLE) -> str:
                              "kinematic error on the torsion alone (lara8_kinematic.py)",
                              "torsion residual RMS on it, rad: no kinematic error -> orders fitted here"],
                             [_verdict_row(r) for r in rows])
+    labels = list(rows[0]["yardstick"]) if rows else []
+    lines += ["", "## The verdict's yardstick: what each set misses", "",
+              "Each channel's held-out residual beyond its sensors' floor at the corrected set (diagnosis/floors.py), "
+              "in N.m and as a share of the torque span; more than the default accuracy (5 %) is `unexplained`, "
+              "more than 10 % never `consistent`.", ""]
+    lines += markdown_table(["recording", "torque span (N.m)", *labels],
+                            [[r["recording"], f"{r['yardstick'][labels[0]]['span']:.3g}",
+                              *[_yardstick_cell(r["yardstick"][label]) for label in labels]] for r in rows])
     kinematic = [r for r in rows if any(f["effect"] == "kinematic_error" for f in r["findings"])]
     shipped = [r for r in rows if r["with_example_parameters"]["kinematic_error_says"].startswith(("added", "resized"))]
     on_torsion = [r for r in rows if r["torsion"]["named"]]

@@ -276,6 +276,7 @@ def document(result) -> dict:
         "detection_limits": [x.as_dict() for x in result.limits],
         "located": result.located,
         "noise": {c: round(s, 6) for c, s in result.sigma.items()},
+        "accuracy": result.accuracy.as_dict() if result.accuracy else None,
         "estimator": estimator_comparison(diag, result.params),
         "recording": dict(recordings[0], torque_sensor=diag.has_sensor, analysed_samples=len(diag.rec),
                           current_alignment=result.current_alignment),

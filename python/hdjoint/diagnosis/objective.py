@@ -70,6 +70,21 @@ class Objective:
         weight = min(1.0, self.stride / self.correlation_length(p))
         return Objective(self.setup, self.priors, self.calibrated_names, sigma, measured_at, weight, self._correlation)
 
+    def with_priors(self, priors: dict[str, Prior]) -> "Objective":
+        """The same objective with some priors replaced (resize.released widens them)."""
+        return Objective(self.setup, dict(self.priors, **priors), self.calibrated_names, self.sigma,
+                         self.noise_measured_at, self.data_weight, self._correlation)
+
+    def at_measured_noise(self, p: dict, channels: list[Channel] | None = None) -> np.ndarray:
+        """Per-sample sum of squared residuals over each channel's noise as
+        measured, not scaled with `p`: two sets whose Jl differs are compared
+        on one yardstick (Objective.noise_scale would rescale the link channel)."""
+        total = np.zeros(len(self.rec))
+        for c in channels or self.channels:
+            r = self.eval.residual(c, p) / self.sigma[c.name]
+            total += np.where(np.isfinite(r), r * r, 1e6)
+        return total
+
     def noise_scale(self, channel: Channel, p: dict) -> float:
         """The channel's noise at `p`: as measured, and for a channel that
         `scales_with` a parameter, scaled as it moved. The link against the

@@ -7,6 +7,7 @@ each taking the results of those before it:
   select     forward selection over the effects the recording can test (select.py, search.py)
   resize     parameters the nominal model has, needed beyond their tolerance (resize.py)
   limits     the smallest size of each untold effect the recording would show (detection_limit.py)
+  accuracy   each channel's residual against its sensors' floor and the accuracy asked for (floors.py)
   document   findings.json (findings.py), with terms proposed for what no effect explains (open_library.py)
 """
 from __future__ import annotations
@@ -19,9 +20,10 @@ from threadpoolctl import threadpool_limits
 from hdjoint.diagnosis.calibrate import calibrate, calibration_table
 from hdjoint.diagnosis.detection_limit import detection_limits
 from hdjoint.diagnosis.findings import document, remaining_structure
+from hdjoint.diagnosis.floors import accuracy
 from hdjoint.diagnosis.open_library import propose_terms
 from hdjoint.diagnosis.prepare import prepare
-from hdjoint.diagnosis.resize import resized
+from hdjoint.diagnosis.resize import released, resized
 from hdjoint.diagnosis.results import DiagnosisResult
 from hdjoint.diagnosis.search import HypothesisSearch
 from hdjoint.diagnosis.select import select, unconfirmed_structure
@@ -30,18 +32,21 @@ from hdjoint.io.recording import Recording
 
 def diagnose(rec: Recording | list[Recording], nominal: dict[str, float],
              progress: Callable[[str], None] | None = None, tolerance: dict[str, float] | None = None,
-             workers: int | None = None):
+             workers: int | None = None, accuracy: float | None = None, noise: dict[str, float] | None = None):
     """Run every stage on one recording or several of the same joint (fitted
     jointly); returns (the DiagnosisResult, the findings document). The
     hypotheses of each round are fitted by `workers` processes (None: one
-    per core; 1: in this process), with the same results."""
+    per core; 1: in this process), with the same results. `accuracy`: the
+    torque accuracy asked of the model, N.m (None: rules.ACCURACY_SHARE of
+    the torque span); `noise`: sensors' stated noise ({"i_m": A RMS,
+    "tau_sensor": N.m RMS}; the others are measured on the recording)."""
     # The linear algebra here is tall and thin (thousands of samples by a
     # dozen parameters): one BLAS thread is faster than several fighting over two cores.
     with threadpool_limits(limits=1, user_api="blas"):
-        return _diagnose(rec, nominal, progress, tolerance, workers)
+        return _diagnose(rec, nominal, progress, tolerance, workers, accuracy, noise)
 
 
-def _diagnose(rec, nominal, progress, tolerance, workers):
+def _diagnose(rec, nominal, progress, tolerance, workers, stated_accuracy=None, stated_noise=None):
     setup = prepare(rec, nominal, tolerance, progress, workers)
     calibrated = calibrate(setup)
     objective = calibrated.objective
@@ -52,13 +57,23 @@ def _diagnose(rec, nominal, progress, tolerance, workers):
     p = selection.params
     calibration = calibration_table(objective, selection.last_fit, p)
     setup.say("checking what remains")
-    resized_findings, unattributed = resized(objective, selection, calibration)
+    gross = released(objective, selection, calibration)  # a link model far off, before the priors hold it short
+    if gross.selection is not selection:  # the corrected set carries a released estimate
+        selection = gross.selection
+        p = selection.params
+        calibration = calibration_table(objective, selection.last_fit, p)
+    settled = {c.name for f in gross.findings for c in f.resized} | {u["parameter"] for u in gross.unexplained}
+    resized_findings, unattributed = resized(objective, selection, calibration, settled)
+    resized_findings = sorted(gross.findings + resized_findings, key=lambda f: f.p_value)
+    unattributed += gross.unexplained
     setup.say("measuring the smallest size of each untold effect this recording would show")
     limits = detection_limits(search, selection, {e for f in selection.findings + resized_findings
                                                   for e in f.named()})
+    setup.say("measuring each channel's residual against its sensors' floor")
+    size = accuracy(objective, p, selection.not_testable, stated_accuracy, stated_noise)
     result = DiagnosisResult(objective, calibrated, selection, search, selection.findings + resized_findings, calibration,
                              located, remaining_structure(objective, p) + unconfirmed_structure(selection, objective)
-                             + unattributed, limits)
+                             + unattributed + size.beyond, limits, size)
     doc = document(result)
     if doc["unexplained"]:  # open-library fallback: propose terms for what no named effect explains
         doc["proposed_terms"] = propose_terms(objective, p, doc["unexplained"])

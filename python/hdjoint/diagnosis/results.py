@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 
 from hdjoint.diagnosis.calibrate import Calibration
 from hdjoint.diagnosis.calibration import Calibrated
+from hdjoint.diagnosis.floors import Accuracy
 from hdjoint.diagnosis.hypotheses import Finding, Fit
 from hdjoint.diagnosis.objective import Objective
 from hdjoint.diagnosis.search import HypothesisSearch
@@ -23,6 +24,7 @@ class DiagnosisResult:
     located: list[dict] = field(default_factory=list)      # structure in the calibrated model's residuals
     unexplained: list[dict] = field(default_factory=list)  # structure no finding explains
     limits: list = field(default_factory=list)  # detection_limit.Limit per effect tested and not accepted
+    accuracy: Accuracy | None = None  # each channel's residual against its floor and the accuracy asked for
 
     @property
     def nominal(self) -> dict:

@@ -67,7 +67,29 @@ DOMINANT_GAIN = 0.30
 # An order stands out of its off-orders' floor by this factor.
 ORDER_PROMINENCE = 3.0
 
+# --- The verdict's absolute yardstick (floors.py) ------------------------------
+# The accuracy a model must reach, by default, as a share of the torque span:
+# torque estimators and sensors of this class state a few % of their range.
+ACCURACY_SHARE = 0.05
+# A model missing more than this share of the torque span is never
+# `consistent`, whatever accuracy is stated (issue 38).
+MAX_MISS_SHARE = 0.10
+# The torque span: between these percentiles of the torque the joint carries
+# (the extremes of a real log hold spikes).
+TORQUE_SPAN_PERCENTILES = (2.0, 98.0)
+# A standstill long enough to measure a sensor's scatter at (samples).
+STANDSTILL_SAMPLES = 50
+
 # --- Calibration ----------------------------------------------------------
+# Parameters a user often takes from another joint (a catalogue's stiffness, a
+# CAD link model) and may have off by a factor, not by a tolerance: with their
+# tolerance as prior, the calibration holds them near a grossly wrong nominal
+# value (issue 38: mgl 4 N.m on an arm whose torque swings over 190 N.m). The
+# resize stage refits them with the prior GROSS_FACTOR times the nominal value
+# wide (resize.released); an estimate beyond GROSS_FACTOR times the nominal
+# value either way is another part, not a mis-sized one.
+GROSS_CHECKED = ("mgl", "Jl", "Kf")
+GROSS_FACTOR = 25.0
 RESIZE_Z = 3.0          # |estimate - nominal| / tolerance beyond which a parameter counts as resized
 IDENTIFIED_RATIO = 0.5  # posterior std / prior std below which the recording identifies a parameter
 INTERVAL = 0.95         # every fitted parameter's interval
