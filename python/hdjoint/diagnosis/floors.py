@@ -33,6 +33,7 @@ from hdjoint.diagnosis.effects import EFFECTS
 from hdjoint.diagnosis.findings import regimes, segments
 from hdjoint.diagnosis.kinematics import regime_filter
 from hdjoint.diagnosis.objective import Objective
+from hdjoint.io import parameters
 from hdjoint.diagnosis.rules import ACCURACY_SHARE, MAX_MISS_SHARE, STANDSTILL_SAMPLES, TORQUE_SPAN_PERCENTILES
 
 MAD_TO_STD = 1.4826  # a normal's standard deviation over its median absolute deviation
@@ -133,8 +134,8 @@ def _filter_gains(objective: Objective) -> tuple[float, float]:
 def floors(objective: Objective, p: dict, noise: dict) -> dict[str, dict[str, float]]:
     """Per channel, the floor's contributions (N.m) through the model's gains at `p`."""
     smooth_gain, accel_gain = _filter_gains(objective)
-    q_m = 2 * math.pi / p["motor_counts"] / math.sqrt(12.0)
-    q_l = 2 * math.pi / p["link_counts"] / math.sqrt(12.0)
+    q_m = parameters.encoder_step(p["motor_counts"]) / math.sqrt(12.0)
+    q_l = parameters.encoder_step(p["link_counts"]) / math.sqrt(12.0)
     # The spring's local stiffness (eq. (5) stiffens with torque), RMS over the run's reference torque.
     reference = np.nan_to_num(objective.reference_torque(p))[objective.used]
     stiffness = float(np.sqrt(np.mean((p["Kf"] * (1.0 + (p["Cf"] * reference) ** 2)) ** 2))) if len(reference) else p["Kf"]

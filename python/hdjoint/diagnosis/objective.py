@@ -14,6 +14,7 @@ from scipy.optimize import least_squares
 from hdjoint.diagnosis.calibration import Prior, posterior_std, robust_std, widened
 from hdjoint.diagnosis.channels import Channel
 from hdjoint.diagnosis.effects import ALWAYS_CALIBRATED, calibrated_parameters, orthogonal_parameters
+from hdjoint.diagnosis.effects.base import RecordingScale
 from hdjoint.diagnosis.hypotheses import Fit
 from hdjoint.diagnosis.part_torques import sharp_transmission, tau_transmission
 from hdjoint.diagnosis.prepare import Setup, place_offset
@@ -31,6 +32,11 @@ def _typical_size(name: str, value: float) -> float:
     info = parameters.table()[name]
     floor = info.tolerance_absolute if info.calibrated() else 0.0
     return max(abs(float(value)), floor, 1e-12)
+
+
+def torsion_count(p: dict) -> float:
+    """The smallest torsion theta_m/N - theta_l the encoders resolve: one count of the coarser, rad."""
+    return max(parameters.encoder_step(p["motor_counts"]) / p["N"], parameters.encoder_step(p["link_counts"]))
 
 
 class Objective:
@@ -241,6 +247,11 @@ class Objective:
 
     def initial_offset(self, p) -> dict:
         return place_offset(self.rec, p, self.reference_torque(p))
+
+    def recording_scale(self, p: dict) -> RecordingScale:
+        """What a fitted effect is judged physical against (Effect.degenerate)."""
+        time = self.rec.time[self.used]
+        return RecordingScale(self.torsion_span(p), float(time[-1] - time[0]) if len(time) else 0.0, torsion_count(p))
 
     def torsion_span(self, p: dict) -> float:
         """The torsion of the recording (5-95 %), rad: the smaller of what the

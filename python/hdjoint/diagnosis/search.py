@@ -159,7 +159,7 @@ class HypothesisSearch:
                     for b, a in zip(per_before, per_after))
         n_eff = np.count_nonzero(self.objective.train) / self.objective.correlation_length(p)
         dbic = delta_bic(n_eff, np.mean(before[self.objective.train]), np.mean(after[self.objective.train]), len(names))
-        degenerate = effect.degenerate(fit.params, self.objective.torsion_span(p))
+        degenerate = effect.degenerate(fit.params, self.objective.recording_scale(p))
         if degenerate is None and effect.own_gain_checked:
             degenerate = self.borrowed_gain(effect, p, fit.params, names, channels, after)
         hypothesis = Hypothesis(effect, p, fit.params, names, gain, float(dbic), orders, worst_channel_ratio=worst,

@@ -76,6 +76,11 @@ def values_in_text(values: dict[str, float]) -> str:
     return ", ".join(f"{n} = {v:.3g}{unit_in_text(table()[n].unit)}" for n, v in values.items())
 
 
+def encoder_step(counts: float) -> float:
+    """One count of an encoder with `counts` per revolution, rad (0 counts: not quantised, 0 rad)."""
+    return 2 * math.pi / counts if counts > 0 else 0.0
+
+
 def defaults(scope: str = "all") -> dict[str, float]:
     """Default values for 'all', 'estimator' or 'plant'."""
     pick = {
@@ -199,16 +204,64 @@ def check_tolerances(overrides, source: str = "parameter set") -> dict[str, floa
     return checked
 
 
+# What a parameter file may state about the joint's measurement, beside its
+# parameters: {"accuracy": 2.0} asks the diagnosis for a model within 2 N.m
+# RMS; {"sensor_noise": {"i_m": 0.004}} gives a datasheet's current noise
+# (A RMS; "tau_sensor" in N.m RMS) in place of measuring it on the recording.
+ACCURACY_KEY = "accuracy"
+SENSOR_NOISE_KEY = "sensor_noise"
+SENSOR_NOISE_UNITS = {"i_m": "A", "tau_sensor": "N.m"}
+
+
+def _positive_number(value) -> bool:
+    return not isinstance(value, bool) and isinstance(value, (int, float)) and 0.0 < value < math.inf
+
+
+def check_accuracy(value, source: str = "parameter set") -> float | None:
+    """The stated torque accuracy, N.m RMS (None when not stated)."""
+    if value is None:
+        return None
+    if not _positive_number(value):
+        raise ParameterError(f"{source}: '{ACCURACY_KEY}' must be a positive number of N.m (RMS), not {value!r}")
+    return float(value)
+
+
+def check_sensor_noise(stated, source: str = "parameter set") -> dict[str, float]:
+    """The stated sensor noise, RMS per recording column ({} when not stated)."""
+    if not isinstance(stated, dict):
+        raise ParameterError(f"{source}: '{SENSOR_NOISE_KEY}' must be an object of column: RMS noise")
+    for column, value in stated.items():
+        if column not in SENSOR_NOISE_UNITS:
+            raise ParameterError(f"{source}: '{SENSOR_NOISE_KEY}' names '{column}'; it states "
+                                 f"{' and '.join(SENSOR_NOISE_UNITS)} (the encoders' noise is their counts)")
+        if not _positive_number(value):
+            raise ParameterError(f"{source}: noise of '{column}' must be a positive number of "
+                                 f"{SENSOR_NOISE_UNITS[column]} (RMS), not {value!r}")
+    return {column: float(value) for column, value in stated.items()}
+
+
 def load(path: str | os.PathLike | None) -> dict[str, float]:
     """Defaults overridden by a JSON parameter file (None: defaults only).
-    Its optional "tolerance" object is checked here and read by load_tolerances."""
+    Its optional "tolerance", "accuracy" and "sensor_noise" entries are
+    checked here and read by load_tolerances and load_measurement."""
     params = defaults()
     if path is None:
         return params
     data = _read_json(path)
     check_tolerances(data.pop(TOLERANCE_KEY, {}), str(path))
+    check_accuracy(data.pop(ACCURACY_KEY, None), str(path))
+    check_sensor_noise(data.pop(SENSOR_NOISE_KEY, {}), str(path))
     params.update(check(data, str(path)))
     return params
+
+
+def load_measurement(path: str | os.PathLike | None) -> tuple[float | None, dict[str, float]]:
+    """The stated accuracy (N.m, or None) and sensor noise ({} when none) of a parameter file."""
+    if path is None:
+        return None, {}
+    data = _read_json(path)
+    return (check_accuracy(data.get(ACCURACY_KEY), str(path)),
+            check_sensor_noise(data.get(SENSOR_NOISE_KEY, {}), str(path)))
 
 
 def load_tolerances(path: str | os.PathLike | None) -> dict[str, float]:

@@ -59,7 +59,9 @@ def calibrate_from(paths: list[str], params_path: str | None, time_unit: str | N
     nominal = read_params(params_path)
     try:
         tolerance = parameters.load_tolerances(params_path)
-        _, doc = diagnose(recs if len(recs) > 1 else recs[0], nominal, progress=_progress, tolerance=tolerance)
+        accuracy, noise = parameters.load_measurement(params_path)
+        _, doc = diagnose(recs if len(recs) > 1 else recs[0], nominal, progress=_progress, tolerance=tolerance,
+                          accuracy=accuracy, noise=noise)
     except (parameters.ParameterError, DiagnosisError) as e:
         raise UserError(str(e)) from None
     chosen = dict(doc["params"])

@@ -23,7 +23,8 @@ def diagnose_to_directory(recording, params, out, validate=(), time_unit: str | 
                           current_sign: float = 1.0) -> dict:
     """Diagnose RECORDING (a path, or a list of paths of one joint, fitted
     jointly) against PARAMS (a JSON path, or None for the defaults; its
-    "tolerance" object overrides the calibration priors) and write findings.json, params.json, params.ssv and
+    "tolerance" object overrides the calibration priors, its "accuracy" and
+    "sensor_noise" set the verdict's yardstick) and write findings.json, params.json, params.ssv and
     report.html into OUT. Returns the findings document. Raises UserError
     for bad input; nothing is written unless everything was computed."""
     paths = [recording] if isinstance(recording, (str, Path)) else list(recording)
@@ -46,10 +47,12 @@ def _diagnose_locked(paths, params, out, validate, time_unit, current_sign) -> d
     nominal = read_params(params)
     try:
         tolerance = parameters.load_tolerances(params)
+        accuracy, noise = parameters.load_measurement(params)
     except parameters.ParameterError as e:
         raise UserError(str(e)) from None
     try:
-        result, doc = diagnose(recs if len(recs) > 1 else recs[0], nominal, progress=_progress, tolerance=tolerance)
+        result, doc = diagnose(recs if len(recs) > 1 else recs[0], nominal, progress=_progress, tolerance=tolerance,
+                               accuracy=accuracy, noise=noise)
         if others:
             _progress("checking the corrected model on the other recordings")
             doc["validation"] = [validate_on(o, result.nominal, result.calibrated_params, doc["params"],

@@ -1,20 +1,20 @@
 """Lost motion: a dead zone of torsion around zero torque."""
 from __future__ import annotations
 
-from hdjoint.diagnosis.effects.base import Effect, Size, TruthDraw
+from hdjoint.diagnosis.effects.base import Effect, RecordingScale, Size, TruthDraw
 
 
 class Backlash(Effect):
-    def degenerate(self, p: dict, torsion_span: float) -> str | None:
+    def degenerate(self, p: dict, scale: RecordingScale) -> str | None:
         """A dead zone at least half as wide as the recorded torsion leaves the
         transmission carrying no torque over most of the recording: not lost
         motion, a transmission blinded to whatever it failed to explain (a
         dead zone can swallow torsion that is kinematic error, leaving eq.
         (7) at its nominal value)."""
-        if p["backlash"] < 0.5 * torsion_span:
+        if p["backlash"] < 0.5 * scale.torsion_span:
             return None
         return (f"the fitted dead zone ({p['backlash']:.2g} rad) is at least half the recorded torsion "
-                f"({torsion_span:.2g} rad): a transmission that carries no torque, not lost motion")
+                f"({scale.torsion_span:.2g} rad): a transmission that carries no torque, not lost motion")
 
     def plant_in_truth(self, draw: TruthDraw) -> None:
         draw.truth["backlash"] = 2e-5 * draw.scaled()

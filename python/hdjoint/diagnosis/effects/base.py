@@ -33,6 +33,16 @@ TABLE_JOINT = "the parameter table's SHD-17-100-class joint"
 
 
 @dataclass(frozen=True)
+class RecordingScale:
+    """What a fitted effect is judged physical against: the recording's
+    torsion (5-95 %, rad), its length (s) and the smallest torsion its
+    encoders resolve (one count of the coarser of the two, rad)."""
+    torsion_span: float
+    duration: float
+    torsion_count: float
+
+
+@dataclass(frozen=True)
 class TruthDraw:
     """What an effect may use to plant itself in the independent truth
     (benchmarks/hdjoint_truth): the truth's parameter dict, its model form,
@@ -105,8 +115,9 @@ class Effect:
         trial, names, used = self.fill_slots(p, search(p, self.order_angles))
         return trial, names, [o for _, o in used]
 
-    def degenerate(self, p: dict, torsion_span: float) -> str | None:
-        """Why a fit is not this effect (fitted parameters, the recording's torsion span in rad), or None."""
+    def degenerate(self, p: dict, scale: RecordingScale) -> str | None:
+        """Why a fit is not this effect, or is not physical on this recording (a
+        thermal time constant of a fraction of a second), or None."""
         return None
 
     def settle(self, finding, objective):

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from hdjoint import _core
-from hdjoint.diagnosis.effects.base import Effect, TruthDraw
+from hdjoint.diagnosis.effects.base import Effect, RecordingScale, TruthDraw
 from hdjoint.io import parameters
 
 # A Dahl loop lower than this share of the torque the torsion spans explains nothing itself.
@@ -25,15 +25,22 @@ def _loop_that_never_closes(p: dict, torsion_span: float) -> str | None:
 
 
 class Hysteresis(Effect):
-    def degenerate(self, p: dict, torsion_span: float) -> str | None:
-        """A fit that is not a loop: one that never closes, or one too low to
-        explain anything, whose gain is the refitted stiffness's (a softer
-        flexspline shrinks the transmission's torque, as a dead zone does)."""
-        height = LOOP_HEIGHT_SHARE * p["Kf"] * torsion_span
+    def degenerate(self, p: dict, scale: RecordingScale) -> str | None:
+        """A fit that is not a loop: one too low to explain anything, whose
+        gain is the refitted stiffness's (a softer flexspline shrinks the
+        transmission's torque, as a dead zone does); one switching within an
+        encoder count, which the recording cannot show as a loop (it is a
+        friction-like step on the torsion); or one that never closes."""
+        height = LOOP_HEIGHT_SHARE * p["Kf"] * scale.torsion_span
         if p["hys_H"] < height:
             return (f"the fitted loop (H = {p['hys_H']:.2g} N.m) is below {LOOP_HEIGHT_SHARE:g} of the torque the "
-                    f"torsion spans ({p['Kf'] * torsion_span:.3g} N.m): its gain is the refitted stiffness's, not a loop")
-        return _loop_that_never_closes(p, torsion_span)
+                    f"torsion spans ({p['Kf'] * scale.torsion_span:.3g} N.m): its gain is the refitted stiffness's, "
+                    "not a loop")
+        width = p["hys_H"] / max(p["hys_sigma"], 1e-300)
+        if width < scale.torsion_count:
+            return (f"the fitted loop switches over {width:.2g} rad of torsion, less than one encoder count "
+                    f"({scale.torsion_count:.2g} rad): the encoders cannot show it as a loop")
+        return _loop_that_never_closes(p, scale.torsion_span)
 
     def in_the_estimator(self, objective, params: dict) -> dict | None:
         """The fitted loop as the estimator FMU runs it: its compliance model

@@ -20,7 +20,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from hdjoint.diagnosis.effects.base import Effect, Size, TruthDraw
+from hdjoint.diagnosis.effects.base import Effect, RecordingScale, Size, TruthDraw
 from hdjoint.diagnosis.effects.coulomb_friction import EFFECT as COULOMB
 from hdjoint.diagnosis.kinematics import Kinematics
 from hdjoint.diagnosis.rules import EVIDENCE_Z
@@ -99,7 +99,7 @@ SMOOTHING_LOOKALIKE = Effect(
 
 
 class StribeckFriction(Effect):
-    def degenerate(self, p: dict, torsion_span: float) -> str | None:
+    def degenerate(self, p: dict, scale: RecordingScale) -> str | None:
         """A Stribeck rise narrower than the Coulomb law's own smoothing is no
         rise: the law is (Fc + Fs*exp(-(w/omega_s)^2))*tanh(w/omega_fc), so with
         omega_s below omega_fc the extra level lives only where tanh is still
