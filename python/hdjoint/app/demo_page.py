@@ -61,8 +61,11 @@ def named_line(story: Story) -> str:
         return (f"Named on the {FIRST} recording: not {HIDDEN.name} (verdict "
                 f"{story.diagnosis['verdict'].replace('_', ' ')}; findings: {', '.join(others) or 'none'}).")
     also = f" Also named: {', '.join(others)}." if others else ""
+    beyond = story.diagnosis["beyond_tolerance"]
+    rest = ("beyond their tolerance: " + ", ".join(f"{n} ({_meaning(n)})" for n in beyond) if beyond
+            else "within their tolerances")
     return (f"Named on the {FIRST} recording: " + "; ".join(map(_named, hits)) +
-            f". Corrected set: diagnosis/params.json.{also}")
+            f". Corrected set (the other parameters calibrated, {rest}): diagnosis/params.json.{also}")
 
 
 def closure_line(story: Story) -> str:
@@ -71,8 +74,10 @@ def closure_line(story: Story) -> str:
     checks = story.diagnosis.get("validation") or []
     residuals = "; ".join(f"{name} {row['nominal']['rms']:.3g} -> {row['corrected']['rms']:.3g} N.m"
                           for name, row in (checks[0]["channels"].items() if checks else ()))
+    untold = [x.get("effect") or x["parameter"] for x in story.closure.get("cannot_tell", [])]
+    caveat = f" (that recording cannot tell {', '.join(untold)})" if untold else ""
     return (f"Closure on the {SECOND} recording (another excitation): {closed}, the corrected set's "
-            f"diagnosis there is {verdict}. Residual RMS there, nominal -> corrected set: {residuals}.")
+            f"diagnosis there is {verdict}{caveat}. Residual RMS there, nominal -> corrected set: {residuals}.")
 
 
 def tau_hat_line(story: Story) -> str:
