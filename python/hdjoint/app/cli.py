@@ -173,7 +173,8 @@ def build_parser() -> argparse.ArgumentParser:
     _time_unit_argument(p)
     p.set_defaults(run=cmd_diagnose)
 
-    p = sub.add_parser("demo", help="the main job on built-in data: FMUs, estimation, paper table, report")
+    p = sub.add_parser("demo", help="the main job on built-in data: FMUs, the paper's table, a hidden effect named without a "
+                       "torque sensor and closed on a second recording (index.html)")
     p.add_argument("--out", default="hdjoint-demo", help="output directory (default: hdjoint-demo)")
     p.set_defaults(run=cmd_demo)
 
