@@ -11,11 +11,11 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
-from hdjoint.io.figures import to_data_uri  # noqa: E402
-from hdjoint.fleet import store, trend  # noqa: E402
+from hdjoint.fleet import store, trend
+from hdjoint.io.figures import to_data_uri
 
 STYLE = ("body{font-family:sans-serif;max-width:1100px;margin:auto;padding:1em}"
          "table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #bbb;padding:2px 6px;"
@@ -37,13 +37,27 @@ def _html_table(header, body_rows, marked=()) -> str:
     return f"<table><tr>{head}</tr>{''.join(lines)}</table>"
 
 
+def _drifting(d) -> str:
+    """The drifting cell: yes, or no with the rule's part the joint misses (a significant change in
+    full view read "no" with no reason: it was below its tolerance)."""
+    s = d.strongest
+    if d.drifting:
+        return "yes"
+    if s is None:
+        return "no: nothing to test"
+    if not d.p_value < trend.ALPHA:
+        return f"no: p = {d.p_value:.2g}, not below {trend.ALPHA:g}"
+    return (f"no: significant, but {s.quantity} changes {100 * s.change:+.0f} %, under the "
+            f"{100 * s.needed:.0f} % its tolerance asks")
+
+
 def _ranking(drifts) -> str:
     body, marked = [], set()
     for i, d in enumerate(drifts):
         s = d.strongest
         if d.drifting:
             marked.add(i)
-        body.append((i + 1, d.joint, d.p_value, "yes" if d.drifting else "no",
+        body.append((i + 1, d.joint, d.p_value, _drifting(d),
                      d.effect if s else "", s.quantity if s else "", d.direction,
                      100 * s.change if s else math.nan, s.slope_per_day if s else math.nan,
                      len(d.trends)))
@@ -55,8 +69,9 @@ def _ranking(drifts) -> str:
             f"parameter's tolerance (or {trend.RELEVANT_CHANGE:.0%} of its first value where none is stated), so "
             f"a joint without drift is flagged with probability at most {trend.ALPHA:.0%} (measured false-alarm "
             f"rate: docs/fleet.md). Ranking: drifting joints first, then each group by its p-value (smallest "
-            f"first); the effect and quantity shown are those of the joint's smallest p-value, so a joint that is "
-            f"not drifting may show a large change that is not significant, or a significant one below its "
+            f"first); the effect and quantity shown are the joint's strongest trend: one whose change reaches its "
+            f"tolerance before any other, then the smallest p-value. A joint that is not drifting says which part "
+            f"of the rule it misses: a large change that is not significant, or a significant one below its "
             f"tolerance.</p>"
             + _html_table(("rank", "joint", "drift p", "drifting", "effect", "quantity", "direction",
                            "change over the period (%)", "slope per day", "quantities tested"), body, marked))
@@ -131,9 +146,9 @@ def build(found: list[dict]) -> str:
         by_joint.setdefault(str(r.get("joint")), []).append(r)
     commands = sorted({html.escape(str(r.get("command"))) for r in found})
     ok = sum(r.get("status") == "ok" for r in found)
-    sections = [f"<h1>Fleet report</h1><p>{len(found)} recordings of {len(by_joint)} joints ({', '.join(commands)}): "
+    sections = [(f"<h1>Fleet report</h1><p>{len(found)} recordings of {len(by_joint)} joints ({', '.join(commands)}): "
                 f"{ok} done, {len(found) - ok} failed. Written "
-                f"{datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC.</p>"]
+                f"{datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC.</p>")]
     if any(d.trends for d in drifts):
         sections.append(_ranking(drifts))
         sections.append("<h2>Parameters over time, per joint</h2>")
