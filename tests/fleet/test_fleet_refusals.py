@@ -234,3 +234,14 @@ def test_a_joint_not_drifting_says_which_part_of_the_rule_it_misses():
              for joint in ("below", "beyond")}
     assert cells["beyond"] == "yes"
     assert cells["below"] == "no: significant, but Fc changes +28 %, under the 30 % its tolerance asks"
+
+
+
+def test_the_ranking_names_each_quantity_with_its_meaning_and_unit():
+    """The ranking showed a bare symbol ("Fc") and a slope with no unit."""
+    from hdjoint.fleet.report import build
+    found = [{"joint": "j", "date": f"2026-01-0{d + 1}", "status": "ok", "recording": f"/r/{d}.csv",
+              "command": "diagnose", "param.Fc": 0.015 * (1 + 0.05 * d + 0.001 * (-1) ** d)} for d in range(6)]
+    page = build(found)
+    assert "<td>Fc (motor-side Coulomb friction)</td>" in page
+    assert re.search(r"<td>[0-9.e-]+ N\.m/day</td>", page)

@@ -4,7 +4,6 @@ model added and the fit before and after."""
 from __future__ import annotations
 
 import html
-import re
 
 import matplotlib
 
@@ -78,12 +77,11 @@ def _fmt(x) -> str:
 
 def _meaning(name: str) -> tuple[str, str]:
     """A parameter's unit and the first clause of its description (the parameter table's), or blanks."""
-    from hdjoint.io.parameters import table
+    from hdjoint.io.parameters import meaning, table
     info = table().get(name)
     if info is None:
         return "", ""
-    short = re.split(r"; |: | \(|, eq\.", info.description)[0]
-    return ("" if info.unit == "1" else info.unit), short
+    return ("" if info.unit == "1" else info.unit), meaning(name)
 
 
 def _fixed(x: float, digits: int = 2) -> str:

@@ -15,6 +15,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from hdjoint.fleet import store, trend
+from hdjoint.io import parameters
 from hdjoint.io.figures import to_data_uri
 
 STYLE = ("body{font-family:sans-serif;max-width:1100px;margin:auto;padding:1em}"
@@ -51,6 +52,21 @@ def _drifting(d) -> str:
             f"{100 * s.needed:.0f} % its tolerance asks")
 
 
+def _quantity(name: str) -> tuple[str, str]:
+    """A tracked quantity's name for a reader (the symbol with its meaning) and its unit."""
+    if name in trend.KINEMATIC_TERMS:  # an amplitude over a revolution of eq. (7)'s and the extra slots' terms
+        return f"{name.replace('_', ' ')} (amplitude)", "rad"
+    info = parameters.table().get(name)
+    if info is None:
+        return name, ""
+    return f"{name} ({parameters.meaning(name)})", ("" if info.unit == "1" else info.unit)
+
+
+def _slope(s) -> str:
+    unit = _quantity(s.quantity)[1]
+    return f"{s.slope_per_day:.4g} {unit + '/' if unit else ''}day"
+
+
 def _ranking(drifts) -> str:
     body, marked = [], set()
     for i, d in enumerate(drifts):
@@ -58,8 +74,8 @@ def _ranking(drifts) -> str:
         if d.drifting:
             marked.add(i)
         body.append((i + 1, d.joint, d.p_value, _drifting(d),
-                     d.effect if s else "", s.quantity if s else "", d.direction,
-                     100 * s.change if s else math.nan, s.slope_per_day if s else math.nan,
+                     d.effect if s else "", _quantity(s.quantity)[0] if s else "", d.direction,
+                     100 * s.change if s else math.nan, _slope(s) if s else "",
                      len(d.trends)))
     return ("<h2>Joints ranked by drift</h2>"
             f"<p>Trend test: weighted least-squares slope t-test of each tracked quantity against time (weights "
@@ -74,7 +90,7 @@ def _ranking(drifts) -> str:
             f"of the rule it misses: a large change that is not significant, or a significant one below its "
             f"tolerance.</p>"
             + _html_table(("rank", "joint", "drift p", "drifting", "effect", "quantity", "direction",
-                           "change over the period (%)", "slope per day", "quantities tested"), body, marked))
+                           "change over the period (%)", "slope", "quantities tested"), body, marked))
 
 
 def _joint_figure(joint: str, joint_rows: list[dict], drift) -> str:
@@ -83,7 +99,8 @@ def _joint_figure(joint: str, joint_rows: list[dict], drift) -> str:
     if not ok or not shown:
         return ""
     days = trend._days([r.get("date") for r in ok])
-    labels = {tr.quantity: f"{tr.quantity} (p = {tr.p_value:.2g})" for tr in drift.trends}
+    labels = {tr.quantity: f"{tr.quantity}" + (f" ({_quantity(tr.quantity)[1]})" if _quantity(tr.quantity)[1] else "")
+              + f", p = {tr.p_value:.2g}" for tr in drift.trends}
     cols = min(3, len(shown))
     nrows = math.ceil(len(shown) / cols)
     fig, axes = plt.subplots(nrows, cols, figsize=(3.6 * cols, 2.6 * nrows), constrained_layout=True, squeeze=False)
