@@ -95,7 +95,7 @@ def test_the_evidence_terms_are_explained_once_and_used_as_explained(report_dir)
     assert page.count("Reading the evidence.") == 1
     terms = page[page.index("Reading the evidence."):]
     for term in ("Held-out gain", "held-out folds", "simulated null", "ΔBIC", "Bayesian information criterion"):
-        assert term in terms[:terms.index("</p>")], term
+        assert term in terms[:terms.index("</ul>")], term
     for f in doc["findings"]:
         better, compared = f["evidence"]["folds_improved"].split("/")
         assert f"better in {better} of {compared} held-out folds" in page

@@ -34,20 +34,21 @@ VERDICT_TEXT = {
 
 # What the evidence's numbers mean, said once on the page (before the first section that uses them).
 EVIDENCE_TERMS = (
-    f"<p class='terms'><b>Reading the evidence.</b> The recording is cut into {FOLDS} blocks; the model is fitted "
-    "on every other one and judged on the rest, the held-out folds. <b>Held-out gain</b>: the share of the "
-    "mean-square residual on the held-out folds that the effect removes, pooled over the channels that see its "
-    "part (each in units of its own noise), at the effect's own fit. <b>z</b>: the mean improvement over the "
-    "held-out folds in standard errors; <b>better in k of n held-out folds</b>: how many of them it improved. An "
-    f"effect present all the time needs z above {EVIDENCE_Z:g} and {STEADY_FOLD_SHARE:.0%} of the folds; for one "
-    "uneven over time by nature (a dead zone, a drift) p decides. "
-    "<b>p</b> is measured against a <b>simulated null</b>: copies of the calibrated model's own residuals with "
-    "their phases randomised (the same spectrum, nothing locked to angle, speed or load), fitted and judged like "
-    f"the recording; p below {FALSE_DISCOVERY_RATE:g} after the Benjamini-Hochberg correction over the hypotheses "
-    "counts. <b>ΔBIC</b>: the Bayesian information criterion with the effect minus without it, on the fitted "
-    f"folds; below {SEEN_BIC:g} is very strong support for the extra parameters. The findings table's RMS columns "
-    "are the residual of one channel in N.m, before and after the corrected model's final fit; the held-out gain "
-    "pools channels in units of their noise, so it is not 1 - (after / before)².</p>")
+    f"<p><b>Reading the evidence.</b> The recording is cut into {FOLDS} blocks; the model is fitted on every "
+    "other one and judged on the rest, the held-out folds.</p><ul class='terms'>"
+    "<li><b>Held-out gain</b>: the share of the mean-square residual on the held-out folds that the effect "
+    "removes, pooled over the channels that see its part (each in units of its own noise), at the effect's own "
+    "fit. The findings table's RMS columns are one channel's residual in N.m, before and after the corrected "
+    "model's final fit, so the gain is not 1 - (after / before)².</li>"
+    "<li><b>z</b>: the mean improvement over the held-out folds in standard errors; <b>better in k of n held-out "
+    f"folds</b>: how many of them it improved. An effect present all the time needs z above {EVIDENCE_Z:g} and "
+    f"{STEADY_FOLD_SHARE:.0%} of the folds; for one uneven over time by nature (a dead zone, a drift) p decides.</li>"
+    "<li><b>p</b>, against the <b>simulated null</b>: copies of the calibrated model's own residuals with their "
+    "phases randomised (the same spectrum, nothing locked to angle, speed or load), fitted and judged like the "
+    f"recording. p below {FALSE_DISCOVERY_RATE:g} after the Benjamini-Hochberg correction over the hypotheses "
+    "counts.</li>"
+    "<li><b>ΔBIC</b>: the Bayesian information criterion with the effect minus without it, on the fitted folds; "
+    f"below {SEEN_BIC:g} is very strong support for the extra parameters.</li></ul>")
 
 
 def _gain(g: float) -> str:
