@@ -9,12 +9,11 @@ import math
 from pathlib import Path
 
 import numpy as np
-from scipy.optimize import minimize_scalar
-
 import stamp
-from hdjoint.io import parameters
 from hdjoint.diagnosis.kinematics import kinematics
+from hdjoint.io import parameters
 from hdjoint.io.recording import read_recording
+from scipy.optimize import minimize_scalar
 
 ROOT = Path(__file__).resolve().parents[1]
 # ../shared/data/lara8 beside the main checkout (a worktree sits one level deeper); the copy the
@@ -106,7 +105,9 @@ def halves(rec):
     return rec.slice(0, mid), rec.slice(mid, None)
 
 
-# The parameter files examples/lara8 ships (no kinematic-error model: eq. (7) all zero), per joint.
+# The parameter files examples/lara8 ships, per joint (no kinematic-error model: eq. (7) all zero; a0 the
+# joint's encoder zero), which its README's commands and the README's LARA8 table use.
+EXAMPLES = {joint: ROOT / "examples/lara8" / f"{joint}_params.json" for joint in JOINTS}
 
 def generated_by(script: str) -> str:
     """The stamp every LARA8 table opens with: what wrote it, when, at which commit, on which machine."""

@@ -28,20 +28,38 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-import lara8_kinematic  # noqa: E402
-from lara8_data import (K1, ROOT, calibrated_value, DATA, TABLE, KT, T_MAX, TOOTH_RATIO, CURRENT_SIGN, JOINTS, catalogue_torsion, catalogue_cf, read_joint, gear_ratio, contents, nominal_for, calibrated_set, halves, generated_by, markdown_table)  # noqa: E402,F401  (the LARA8 conventions)
-
-from hdjoint.io import parameters  # noqa: E402
-from hdjoint.diagnosis.part_torques import Prepared  # noqa: E402
-from hdjoint.diagnosis.effects import KINEMATIC_EQ7  # noqa: E402
-from hdjoint.jobs.inputs import UserError  # noqa: E402
+import lara8_kinematic
+from hdjoint.diagnosis.effects import KINEMATIC_EQ7
+from hdjoint.diagnosis.kinematics import kinematics
+from hdjoint.diagnosis.part_torques import Prepared
+from hdjoint.diagnosis.validation import validate
+from hdjoint.io import parameters
+from hdjoint.io.recording import write_recording
 from hdjoint.jobs.diagnose import diagnose_to_directory
-from hdjoint.io.recording import write_recording  # noqa: E402
-from hdjoint.diagnosis.kinematics import kinematics  # noqa: E402
-from hdjoint.diagnosis.validation import validate  # noqa: E402
-
-EXAMPLES = {joint: ROOT / "examples/lara8" / f"{name}_params.json"
-            for joint, name in (("joint1", "joint12"), ("joint2", "joint12"), ("joint3", "joint3"))}
+from hdjoint.jobs.inputs import UserError
+from lara8_data import (  # noqa: F401  (the LARA8 conventions)
+    CURRENT_SIGN,
+    DATA,
+    EXAMPLES,
+    JOINTS,
+    K1,
+    KT,
+    ROOT,
+    T_MAX,
+    TABLE,
+    TOOTH_RATIO,
+    calibrated_set,
+    calibrated_value,
+    catalogue_cf,
+    catalogue_torsion,
+    contents,
+    gear_ratio,
+    generated_by,
+    halves,
+    markdown_table,
+    nominal_for,
+    read_joint,
+)
 
 
 def _diagnose(rec, n: float, tmp: Path, name: str, nominal: dict | None = None) -> dict:
@@ -70,9 +88,12 @@ def run_joint(joint: str, files: list[str], data: Path, tmp: Path) -> list[dict]
                "kinematic_calibration": {key: calibration[key] for key in KINEMATIC_EQ7 if key in calibration},
                "kinematic_error_says": kinematic_error_says(doc),
                "proposed_terms": doc.get("proposed_terms", []), "seconds": doc.get("seconds"), "validation": []}
-        shipped = _diagnose(rec, n, tmp, f"{joint}-{k}-example", parameters.load(EXAMPLES[joint]))
+        # examples/lara8's own command: the file as logged, its parameter file, --current-sign.
+        shipped = diagnose_to_directory(str(data / name), str(EXAMPLES[joint]), str(tmp / f"{joint}-{k}-example"),
+                                        current_sign=CURRENT_SIGN[joint])
         row["with_example_parameters"] = {"verdict": shipped["verdict"],
-                                          "kinematic_error_says": kinematic_error_says(shipped)}
+                                          "kinematic_error_says": kinematic_error_says(shipped),
+                                          "kinematic_error_short": kinematic_error_short(shipped)}
         row["yardstick"] = {"the table's set": yardstick(doc), "examples/lara8": yardstick(shipped)}
         for label, nominal in small_joint_sets(n).items():
             row["yardstick"][label] = yardstick(_diagnose(rec, n, tmp, f"{joint}-{k}-{len(row['yardstick'])}", nominal))
@@ -146,8 +167,8 @@ def _torsion_cells(r: dict) -> list[str]:
     c = t["closure"]
     if c["cannot"]:
         return [named, f"cannot tell: {c['cannot']}"]
-    return [named, f"{c['none']:.2e} -> {c['fitted']:.2e} (eq. (7) nominal: {c['eq7_nominal']:.2e}; orders "
-                   f"{', '.join(f'{k:g}' for k in c['orders'])})"]
+    return [named, (f"{c['none']:.2e} -> {c['fitted']:.2e} (eq. (7) nominal: {c['eq7_nominal']:.2e}; orders "
+                   f"{', '.join(f'{k:g}' for k in c['orders'])})")]
 
 
 def kinematic_error_says(doc: dict) -> str:
@@ -179,6 +200,48 @@ def kinematic_error_says(doc: dict) -> str:
     return f"not named: {within}; {untestable or 'no order searched'}"
 
 
+def kinematic_error_short(doc: dict) -> str:
+    """The README's phrase for what the diagnosis says of the kinematic error: added or resized with
+    its orders, amplitudes and p, else not testable or not named."""
+    for f in doc["findings"]:
+        if f["effect"] == "kinematic_error":
+            p = f.get("parameters", {})
+            orders = ", ".join(f"order {p[s + '_order']:g}, {_e(math.hypot(p[s + '_a'], p[s + '_b']))} rad"
+                               for s in ("ke_m1", "ke_m2", "ke_l1", "ke_l2") if s + "_order" in p)
+            return f"{f.get('kind')}, {orders}, p = {f.get('p_value', 1.0):.1g}"
+    if any(n["effect"] == "kinematic_error" for n in doc.get("not_testable", [])):
+        return "not testable"
+    return "not named"
+
+
+def _e(x: float) -> str:
+    """A small number in two significant digits, as the README writes it (6.2e-5)."""
+    return f"{x:.1e}".replace("e-0", "e-")
+
+
+def readme_table(rows: list[dict]) -> list[str]:
+    """The README's LARA8 table: per recording, what examples/lara8's commands give (verdict, findings, the
+    kinematic error), the kinematic error on the torsion alone, and the torsion residual on another recording."""
+    cells = []
+    for r in rows:
+        shipped = r["yardstick"]["examples/lara8"]
+        verdict = shipped["verdict"] + (": " + ", ".join(f.replace("_", " ").replace(" (", " ").rstrip(")")
+                                                         for f in shipped["findings"]) if shipped["findings"] else "")
+        t = r["torsion"]
+        alone = "; ".join(f"order {o['order']:g}, {_e(o['amplitude'])} ± {_e(o['half_width'])} rad, p = {o['p']:.0e}"
+                          .replace("e-0", "e-") for o in t["named"])
+        if not alone:
+            alone = (f"cannot tell: {r['contents']['motor_revolutions']:g} motor revolutions"
+                     if t["says"].startswith("cannot tell") else "none holds out")
+        c = t["closure"]
+        where = "" if r["validated_on"].endswith(".csv") else "second half: "
+        closure = "cannot tell" if c["cannot"] else f"{where}{c['none']:.2e} → {c['fitted']:.2e}".replace("e-0", "e-")
+        cells.append([r["recording"].removesuffix(".csv"), verdict,
+                      f"{r['with_example_parameters']['kinematic_error_short']}; {alone}", closure])
+    return markdown_table(["recording", "verdict (examples/lara8)", "kinematic error: diagnosis; torsion alone",
+                           "torsion residual on another recording, rad: none → fitted"], cells)
+
+
 def _contents_row(r: dict) -> list:
     c = r["contents"]
     return [r["recording"], c["duration_s"], c["samples"], c["median_step_ms"], c["motor_revolutions"],
@@ -204,10 +267,10 @@ def _verdict_row(r: dict) -> list:
 
 def write_table(rows: list[dict], path: Path = TABLE) -> str:
     lines = ["# The diagnosis on the real LARA8 recordings", "", generated_by("lara8_table.py"),
-             "Recordings read with the current's sign turned to the encoders' (joints 1 and 2) and N the tooth ratio "
+             ("Recordings read with the current's sign turned to the encoders' (joints 1 and 2) and N the tooth ratio "
              "(121 / 101; the encoders' least-squares slope is given beside it). "
              f"Nominal set: contract defaults with Kt = {KT}, Kf = K1 = {K1:g} N.m/rad, Cf = {catalogue_cf():.4f} "
-             f"1/(N.m) (eq. (5) fitted to the catalogue's K1/K2/K3 curve up to {T_MAX:g} N.m), mgl = 0.", "",
+             f"1/(N.m) (eq. (5) fitted to the catalogue's K1/K2/K3 curve up to {T_MAX:g} N.m), mgl = 0."), "",
              "## What each recording contains", ""]
     lines += markdown_table(["recording", "s", "samples", "step (ms)", "motor rev", "link travel (rad)",
                              "motor / link reversals", "torque 2-98 % (N.m)", "what it cannot say"],
@@ -222,9 +285,9 @@ def write_table(rows: list[dict], path: Path = TABLE) -> str:
                             [_verdict_row(r) for r in rows])
     labels = list(rows[0]["yardstick"]) if rows else []
     lines += ["", "## The verdict's yardstick: what each set misses", "",
-              "Each channel's held-out residual beyond its sensors' floor at the corrected set (diagnosis/floors.py), "
+              ("Each channel's held-out residual beyond its sensors' floor at the corrected set (diagnosis/floors.py), "
               "in N.m and as a share of the torque span; more than the default accuracy (5 %) is `unexplained`, "
-              "more than 10 % never `consistent`.", ""]
+              "more than 10 % never `consistent`."), ""]
     lines += markdown_table(["recording", "torque span (N.m)", *labels],
                             [[r["recording"], f"{r['yardstick'][labels[0]]['span']:.3g}",
                               *[_yardstick_cell(r["yardstick"][label]) for label in labels]] for r in rows])
@@ -239,6 +302,10 @@ def write_table(rows: list[dict], path: Path = TABLE) -> str:
               "Proposed open-library terms: " + ("; ".join(f"{r['recording']}: {t['channel']} {t['terms']} "
                                                            f"(held-out gain {t['holdout_gain']})"
                                                            for r in rows for t in r["proposed_terms"]) or "none") + "."]
+    lines += ["", "## The README's table", "",
+              ("examples/lara8's commands on each recording (its parameter file, `--current-sign -1` for joints 1 "
+              "and 2); the kinematic error on the torsion alone and its residual from the columns above."), ""]
+    lines += readme_table(rows)
     text = "\n".join(lines) + "\n"
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(text)

@@ -12,7 +12,6 @@ import sys
 
 import numpy as np
 import pytest
-
 from hdjoint.fmu import experiments
 from hdjoint.io.recording import read_recording, write_recording
 from hdjoint.io.screening import find_outliers
@@ -27,13 +26,13 @@ def clean(tmp_path_factory):
     d = tmp_path_factory.mktemp("clean")
     path = d / "rec.csv"
     write_recording(path, experiments.run("paper", duration=3.0))
-    run = subprocess.run([*CLI, "diagnose", str(path), "--out", str(d / "out")], capture_output=True, text=True)
+    run = subprocess.run([*CLI, "diagnose", str(path), "--out", str(d / "out")], check=False, capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     return path, json.loads((d / "out" / "findings.json").read_text())
 
 
 def _diagnose(path, out):
-    run = subprocess.run([*CLI, "diagnose", str(path), "--out", str(out)], capture_output=True, text=True)
+    run = subprocess.run([*CLI, "diagnose", str(path), "--out", str(out)], check=False, capture_output=True, text=True)
     return run.returncode, run.stdout, run.stderr
 
 
@@ -111,7 +110,7 @@ def test_a_degenerate_recording_is_refused_naming_why(clean, tmp_path, edit, fra
 
 def test_estimate_names_a_wrapping_encoder(clean, tmp_path):
     path = _edited(clean, tmp_path, lambda r: setattr(r, "theta_l", np.angle(np.exp(1j * 40 * r.theta_l))))
-    run = subprocess.run([*CLI, "estimate", str(path), "-o", str(tmp_path / "e.csv")], capture_output=True, text=True)
+    run = subprocess.run([*CLI, "estimate", str(path), "-o", str(tmp_path / "e.csv")], check=False, capture_output=True, text=True)
     assert run.returncode == 2 and "wraps" in run.stderr and "column theta_l" in run.stderr
 
 
@@ -183,4 +182,28 @@ def test_the_nominal_curve_shows_beneath_an_equal_corrected_one(figure):
     nominal, corrected = (line for line in ax.get_lines() if line.get_label() in ("calibrated nominal", "corrected"))
     assert nominal.get_label() == "calibrated nominal"
     assert corrected.get_linestyle() == "--" and nominal.get_linewidth() > corrected.get_linewidth()
+    plt.close(fig)
+
+
+def test_a_residual_the_findings_leave_unchanged_is_drawn_visibly_and_said_so():
+    """The motor channel's residual over time, unchanged by a transmission finding: the corrected
+    trace was drawn over the nominal one and hid it (legend: two curves; image: one blue trace)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from hdjoint.diagnosis import plots
+    t = np.linspace(0.0, 10.0, 2000)
+    y = np.random.default_rng(0).standard_normal(t.size)
+    fig, ax = plt.subplots()
+    plots.residual_over_time(ax, t, y, y.copy(), [], "motor residual")
+    fig.canvas.draw()
+    image = np.asarray(fig.canvas.buffer_rgba())[..., :3].astype(int)
+    red = (image[..., 0] > 150) & (image[..., 2] < 120)
+    assert red.mean() > 0.01, "the nominal (red) trace is hidden"
+    assert [line.get_label() for line in ax.get_lines()] == [
+        "calibrated nominal model = corrected model (unchanged here)"]
+    plt.close(fig)
+    fig, ax = plt.subplots()
+    plots.residual_over_time(ax, t, y, 0.5 * y, [], "transmission residual")
+    assert [line.get_label() for line in ax.get_lines()] == ["calibrated nominal model", "corrected model"]
     plt.close(fig)

@@ -7,12 +7,11 @@ import subprocess
 
 import numpy as np
 import pytest
-from matplotlib.image import imread
-
 from hdjoint.app import cli
 from hdjoint.fmu.concealed_effects import CASES, nominal_for, record
 from hdjoint.io.parameters import save
 from hdjoint.io.recording import write_recording
+from matplotlib.image import imread
 
 pytestmark = pytest.mark.slow  # a diagnosis to report on, and Chromium
 
@@ -37,7 +36,7 @@ def test_report_is_self_contained(report_dir):
 
 
 def _visible_text(page: str) -> str:
-    page = re.sub(r"<style>.*?</style>", "", page, flags=re.S)
+    page = re.sub(r"<style>.*?</style>", "", page, flags=re.DOTALL)
     return re.sub(r"<[^>]+>", " ", page)
 
 
@@ -83,3 +82,58 @@ def test_report_renders_with_its_figures_in_chromium(report_dir, tmp_path):
     # Figures are drawn in colour (red/blue residual lines); a page of text alone is grey.
     colourful = np.mean(np.ptp(image, axis=2) > 0.25)
     assert colourful > 0.002, f"the rendered report shows no figures ({colourful:.4%} coloured pixels)"
+
+
+# ---------------------------------------------------------------- the evidence's numbers, each said once
+
+
+def test_the_evidence_terms_are_explained_once_and_used_as_explained(report_dir):
+    """ΔBIC, the simulated null and the fold counts ("13/20 folds") were printed with no word on
+    what they are. The page now explains them once, and each finding's evidence uses those words."""
+    page = (report_dir / "report.html").read_text()
+    doc = json.loads((report_dir / "findings.json").read_text())
+    assert page.count("Reading the evidence.") == 1
+    terms = page[page.index("Reading the evidence."):]
+    for term in ("Held-out gain", "held-out folds", "simulated null", "ΔBIC", "Bayesian information criterion"):
+        assert term in terms[:terms.index("</ul>")], term
+    for f in doc["findings"]:
+        better, compared = f["evidence"]["folds_improved"].split("/")
+        assert f"better in {better} of {compared} held-out folds" in page
+    assert not re.search(r"\d+/\d+ folds", _visible_text(page))
+
+
+def test_the_held_out_gain_reads_the_same_wherever_it_is_shown(report_dir):
+    """The evidence said 'held-out gain 11.76 %' beside a table whose RMS before and after give
+    about 7 %: two quantities under one name. The table now shows the gain itself (the share of the
+    held-out mean square removed, pooled over channels) beside the one channel's RMS, as the evidence does."""
+    page = (report_dir / "report.html").read_text()
+    doc = json.loads((report_dir / "findings.json").read_text())
+    table = page[page.index("<h2>Findings</h2>"):]
+    table = table[table.index("<table>"):table.index("</table>")]
+    assert "<th>held-out gain</th>" in table and "<th>channel shown</th>" in table
+    for f in doc["findings"]:
+        gain = f"{100 * f['evidence']['held_out_gain']:.1f} %"
+        assert f"<td>{gain}</td>" in table and f"held-out gain {gain}" in page
+
+
+def test_a_finding_is_printed_once(report_dir):
+    """The summary's line of a finding ('added: backlash (p = ...): backlash = ...') was printed again,
+    whole, at the end of its Findings entry. That entry now gives its fitted values only."""
+    page = (report_dir / "report.html").read_text()
+    doc = json.loads((report_dir / "findings.json").read_text())
+    for f in doc["findings"]:
+        assert page.count(f"<b>{f['kind']}</b>: {f['effect']} (p = ") == 1
+    assert page.count("<b>Fitted:</b>") + page.count("<b>Resized:</b>") == len(doc["findings"])
+
+
+def test_a_resized_parameter_is_given_with_its_unit_and_meaning():
+    """A resized finding read 'wg_load 0.9973 [0.9895, 1.005] (nominal ...)': a raw name, no unit,
+    no meaning (an added one had them). Both now say what the parameter is, from the parameter table."""
+    from hdjoint.diagnosis.report import _finding_line
+    from hdjoint.io.parameters import table
+    entry = {"estimate": 0.9973, "lo": 0.9895, "hi": 1.005, "nominal": 0.5, "tolerance": 0.25}
+    line = _finding_line({"kind": "resized", "effect": "wave_generator_load", "p_value": 1e-3, "resized": True,
+                          "parameters": {"wg_load": entry, "Kf": dict(entry, estimate=9000.0, nominal=10000.0)}})
+    assert "wg_load = 0.9973 [0.9895, 1.005] (share of the wave generator torque" in line
+    assert "Kf = 9000 [0.9895, 1.005] N.m/rad (flexspline stiffness" in line and "nominal 1e+04" in line
+    assert table()["Kf"].unit == "N.m/rad"

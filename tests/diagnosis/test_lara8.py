@@ -84,7 +84,7 @@ def test_the_two_lobe_error_a_nominal_set_lacks_is_added_from_the_encoders_torsi
     from hdjoint.jobs.diagnose import diagnose_to_directory
     from hdjoint.io.recording import write_recording
     write_recording(tmp_path / "joint2.csv", lara8_table.read_joint(DATA / "joint2_jog_joint_mass.csv"))
-    example = Path(__file__).resolve().parents[2] / "examples/lara8/joint12_params.json"
+    example = Path(__file__).resolve().parents[2] / "examples/lara8/joint2_params.json"
     doc = diagnose_to_directory(str(tmp_path / "joint2.csv"), str(example), str(tmp_path / "out"))
     kinematic = next(f for f in doc["findings"] if f["effect"] == "kinematic_error")
     assert kinematic["kind"] == "added" and kinematic["p_value"] <= 0.05

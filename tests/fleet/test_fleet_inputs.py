@@ -4,7 +4,6 @@ import math
 
 import numpy as np
 import pytest
-
 from hdjoint.fleet import rows, trend
 from hdjoint.fleet.inputs import glob_to_regex, plan
 from hdjoint.jobs.inputs import UserError
@@ -160,6 +159,7 @@ def test_kinematic_amplitudes_split_motor_and_link_orders_with_intervals():
 
 def test_progress_line_counts_done_failed_remaining_with_an_eta():
     import io
+
     from hdjoint.fleet.run import Progress
     stream = io.StringIO()
     progress = Progress(10, 2, stream=stream)
@@ -167,3 +167,17 @@ def test_progress_line_counts_done_failed_remaining_with_an_eta():
     progress.update(failed=True, final=True)
     line = stream.getvalue().strip().splitlines()[-1]
     assert "3/10 done (2 earlier), 1 failed, 6 remaining, ETA " in line and "ETA ?" not in line
+
+
+def test_progress_writes_to_the_stderr_of_its_run():
+    """Its stream defaulted to sys.stderr as bound when hdjoint.fleet.run was first imported: a
+    first import inside a test capturing stderr left every later fleet run in that process
+    writing to a closed capture ("I/O operation on closed file", the fleet diagnosis tests failing
+    after the refusal tests)."""
+    import contextlib
+    import io
+
+    from hdjoint.fleet.run import Progress
+    with contextlib.redirect_stderr(io.StringIO()) as now:
+        Progress(1, 0).update(failed=False, final=True)
+    assert "[fleet]" in now.getvalue()

@@ -6,6 +6,7 @@ cluster starts; a params-map pattern used for nothing is named."""
 from __future__ import annotations
 
 import json
+import re
 import signal
 import socket
 import subprocess
@@ -15,8 +16,6 @@ import time
 
 import numpy as np
 import pytest
-
-from hdjoint.fleet import tasks
 from hdjoint.fleet.inputs import plan
 from hdjoint.fleet.tasks import run_one
 from hdjoint.fmu import experiments
@@ -79,7 +78,7 @@ def test_fleet_estimate_refuses_a_gap_as_estimate_does(tmp_path, recording):
         tau_sensor=rec.tau_sensor[keep]))
     row = run_one("estimate", _job(gapped), str(tmp_path / "out"), "k1", {"engine": "batch"})
     assert row["status"] == "failed" and "a gap of 1.001 s" in row["error"] and "lines 501 to 502" in row["error"]
-    single = subprocess.run([*CLI, "estimate", str(gapped), "-o", str(tmp_path / "e.csv")], capture_output=True,
+    single = subprocess.run([*CLI, "estimate", str(gapped), "-o", str(tmp_path / "e.csv")], check=False, capture_output=True,
                             text=True)
     assert single.returncode == 2 and _one_line(single.stderr).split(": ", 1)[1] in row["error"]
 
@@ -110,7 +109,7 @@ def test_a_fleet_where_every_recording_failed_exits_1(tmp_path):
     bad.write_text("time,i_m,theta_m,theta_l\n0.0,1.0,oops,0.0\n0.001,1.0,0.0,0.0\n")
     argv = [*CLI, "fleet", "estimate", str(bad), "--workers", "1", "--quiet", "--out", str(tmp_path / "out")]
     for _ in range(2):  # computed, then found failed from the first run
-        run = subprocess.run(argv, capture_output=True, text=True)
+        run = subprocess.run(argv, check=False, capture_output=True, text=True)
         assert run.returncode == 1, run.stderr
         assert "every recording failed" in run.stderr and "'oops' is not a number" in run.stderr
 
@@ -153,7 +152,8 @@ def test_a_scheduler_that_is_not_dask_is_refused_in_one_line(tmp_path, recording
     threading.Thread(target=answer_like_a_web_server, daemon=True).start()
     try:
         run = subprocess.run([*CLI, "fleet", "estimate", str(recording), "--scheduler", f"tcp://127.0.0.1:{port}",
-                              "--quiet", "--out", str(tmp_path / "o")], capture_output=True, text=True, timeout=120)
+                              "--quiet", "--out", str(tmp_path / "o")], check=False,
+                              capture_output=True, text=True, timeout=120)
     finally:
         server.close()
     assert run.returncode == 2, run.stderr
@@ -204,7 +204,7 @@ def test_a_second_fleet_on_the_same_out_is_refused_while_the_first_runs(tmp_path
         time.sleep(0.005)
     first.send_signal(signal.SIGSTOP)  # hold it while the second tries
     try:
-        second = subprocess.run(argv, capture_output=True, text=True, timeout=60)
+        second = subprocess.run(argv, check=False, capture_output=True, text=True, timeout=60)
     finally:
         first.send_signal(signal.SIGCONT)
     assert second.returncode == 2 and "another hdjoint run" in _one_line(second.stderr)
@@ -217,3 +217,31 @@ def test_fleet_html_states_its_ranking_rule(tmp_path):
     found = [{"joint": "j", "date": f"2026-01-0{d + 1}", "status": "ok", "recording": f"/r/{d}.csv",
               "command": "diagnose", "param.Fc": 0.02 * (1 + 0.01 * d)} for d in range(6)]
     assert "Ranking: drifting joints first, then each group by its p-value" in build(found)
+
+
+def test_a_joint_not_drifting_says_which_part_of_the_rule_it_misses():
+    """A joint whose Fc rose 28 % at p = 0.0002 was listed "drifting: no" beside another effect, with
+    no reason: the change was below the 30 % its tolerance asks. The cell now says so; a joint whose
+    change reaches its tolerance reads "yes"."""
+    from hdjoint.fleet.report import build
+    noise = [0.0, 0.3, -0.2, 0.1, -0.3, 0.2, 0.0, -0.1]
+    def rows(joint, tol):
+        return [{"joint": joint, "date": f"2026-01-{d + 1:02d}", "status": "ok", "recording": f"/{joint}/{d}.csv",
+                 "command": "diagnose", "param.Fc": 0.015 * (1 + 0.04 * d + 0.002 * noise[d]),
+                 "param.Fc.tol": tol} for d in range(8)]
+    page = build(rows("below", 0.3 * 0.015) + rows("beyond", 0.1 * 0.015))
+    cells = {joint: re.search(rf"<td>{joint}</td><td>[^<]*</td><td>([^<]*)</td>", page).group(1)
+             for joint in ("below", "beyond")}
+    assert cells["beyond"] == "yes"
+    assert cells["below"] == "no: significant, but Fc changes +28 %, under the 30 % its tolerance asks"
+
+
+
+def test_the_ranking_names_each_quantity_with_its_meaning_and_unit():
+    """The ranking showed a bare symbol ("Fc") and a slope with no unit."""
+    from hdjoint.fleet.report import build
+    found = [{"joint": "j", "date": f"2026-01-0{d + 1}", "status": "ok", "recording": f"/r/{d}.csv",
+              "command": "diagnose", "param.Fc": 0.015 * (1 + 0.05 * d + 0.001 * (-1) ** d)} for d in range(6)]
+    page = build(found)
+    assert "<td>Fc (motor-side Coulomb friction)</td>" in page
+    assert re.search(r"<td>[0-9.e-]+ N\.m/day</td>", page)

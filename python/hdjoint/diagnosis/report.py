@@ -4,18 +4,24 @@ model added and the fit before and after."""
 from __future__ import annotations
 
 import html
-import re
 
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
-from hdjoint.diagnosis import plots as dp  # noqa: E402
-from hdjoint.io.parameters import unit_in_text, values_in_text  # noqa: E402
-from hdjoint.io.figures import to_data_uri  # noqa: E402
-from hdjoint.diagnosis.structure import candidate_orders  # noqa: E402
+from hdjoint.diagnosis import plots as dp
+from hdjoint.diagnosis.rules import (
+    EVIDENCE_Z,
+    FALSE_DISCOVERY_RATE,
+    FOLDS,
+    SEEN_BIC,
+    STEADY_FOLD_SHARE,
+)
+from hdjoint.diagnosis.structure import candidate_orders
+from hdjoint.io.figures import to_data_uri
+from hdjoint.io.parameters import unit_in_text, values_in_text
 
 VERDICT_TEXT = {
     "missing_physics": "Physics is missing from the nominal model: the findings below name it, model it and "
@@ -24,6 +30,30 @@ VERDICT_TEXT = {
                   "data; what remains is noise and quantisation.",
     "unexplained": "Structure remains that no hypothesis of the library explains; where it is is listed below.",
 }
+
+
+# What the evidence's numbers mean, said once on the page (before the first section that uses them).
+EVIDENCE_TERMS = (
+    f"<p><b>Reading the evidence.</b> The recording is cut into {FOLDS} blocks; the model is fitted on every "
+    "other one and judged on the rest, the held-out folds.</p><ul class='terms'>"
+    "<li><b>Held-out gain</b>: the share of the mean-square residual on the held-out folds that the effect "
+    "removes, pooled over the channels that see its part (each in units of its own noise), at the effect's own "
+    "fit. The findings table's RMS columns are one channel's residual in N.m, before and after the corrected "
+    "model's final fit, so the gain is not 1 - (after / before)².</li>"
+    "<li><b>z</b>: the mean improvement over the held-out folds in standard errors; <b>better in k of n held-out "
+    f"folds</b>: how many of them it improved. An effect present all the time needs z above {EVIDENCE_Z:g} and "
+    f"{STEADY_FOLD_SHARE:.0%} of the folds; for one uneven over time by nature (a dead zone, a drift) p decides.</li>"
+    "<li><b>p</b>, against the <b>simulated null</b>: copies of the calibrated model's own residuals with their "
+    "phases randomised (the same spectrum, nothing locked to angle, speed or load), fitted and judged like the "
+    f"recording. p below {FALSE_DISCOVERY_RATE:g} after the Benjamini-Hochberg correction over the hypotheses "
+    "counts.</li>"
+    "<li><b>ΔBIC</b>: the Bayesian information criterion with the effect minus without it, on the fitted folds; "
+    f"below {SEEN_BIC:g} is very strong support for the extra parameters.</li></ul>")
+
+
+def _gain(g: float) -> str:
+    """A held-out gain (a share) as the page writes every one: a percentage."""
+    return f"{100 * g:.1f} %"
 
 
 def _figure(draw, size=(9, 3.2)) -> str:
@@ -48,12 +78,11 @@ def _fmt(x) -> str:
 
 def _meaning(name: str) -> tuple[str, str]:
     """A parameter's unit and the first clause of its description (the parameter table's), or blanks."""
-    from hdjoint.io.parameters import table
+    from hdjoint.io.parameters import meaning, table
     info = table().get(name)
     if info is None:
         return "", ""
-    short = re.split(r"; |: | \(|, eq\.", info.description)[0]
-    return ("" if info.unit == "1" else info.unit), short
+    return ("" if info.unit == "1" else info.unit), meaning(name)
 
 
 def _fixed(x: float, digits: int = 2) -> str:
@@ -76,11 +105,6 @@ def _where_text(w: dict) -> str:
     return text
 
 
-def _interval_text(v: dict) -> str:
-    return (f"{_fmt(v['estimate'])} [{_fmt(v['lo'])}, {_fmt(v['hi'])}] "
-            f"(nominal {_fmt(v['nominal'])} ± {_fmt(v['tolerance'])})")
-
-
 def _one_of(f: dict) -> str:
     """A look-alike set's members with their shares of the evidence."""
     return " or ".join(f"{html.escape(a['effect'])} ({100 * a['evidence_share']:.0f} % of the evidence)"
@@ -89,36 +113,50 @@ def _one_of(f: dict) -> str:
 
 def _finding_line(f: dict) -> str:
     head = f"<b>{html.escape(f['kind'])}</b>: {html.escape(f['effect'])} (p = {f['p_value']:.2g})"
-    if f.get("resized"):
-        moved = "; ".join(f"{html.escape(n)} {html.escape(_interval_text(v))}" for n, v in f["parameters"].items())
-        if f["kind"] == "ambiguous":
-            return f"{head}: one of {_one_of(f)}; modelled as {html.escape(f['effect'])} resized: {moved}"
-        return f"{head}: {moved}"
-    intervals = f.get("intervals", {})
-    values = "; ".join(
-        f"{html.escape(n)} = {_fmt(v)}" + (f" [{_fmt(intervals[n][0])}, {_fmt(intervals[n][1])}]"
-                                          if intervals.get(n) else "")
-        + (f" {html.escape(_meaning(n)[0])}" if _meaning(n)[0] else "")
-        + (f" ({html.escape(_meaning(n)[1])})" if _meaning(n)[1] else "")
-        for n, v in f["parameters"].items())
-    caveat = f.get("in_the_estimator", {}).get("caveat")
-    values += f". <i>Caveat: {html.escape(caveat)}</i>" if caveat else ""
+    values = _finding_values(f)
     if f["kind"] == "ambiguous":
-        return f"{head}: one of {_one_of(f)}; modelled as {html.escape(f['effect'])}: {values}"
+        resized = " resized" if f.get("resized") else ""
+        return f"{head}: one of {_one_of(f)}; modelled as {html.escape(f['effect'])}{resized}: {values}"
     return f"{head}: {values}"
+
+
+def _named(n: str, value: str, extra: str = "") -> str:
+    """NAME = VALUE UNIT (MEANING; EXTRA), escaped: a parameter as a reader needs it."""
+    unit, meaning = _meaning(n)
+    said = "; ".join(x for x in (meaning, extra) if x)
+    return html.escape(f"{n} = {value}" + (f" {unit}" if unit else "") + (f" ({said})" if said else ""))
+
+
+def _calibrated_text(n: str, v: dict) -> str:
+    """A calibrated or resized parameter: estimate, interval, unit, meaning, nominal and tolerance."""
+    return _named(n, f"{_fmt(v['estimate'])} [{_fmt(v['lo'])}, {_fmt(v['hi'])}]",
+                  f"nominal {_fmt(v['nominal'])} ± {_fmt(v['tolerance'])}")
+
+
+def _finding_values(f: dict) -> str:
+    """A finding's parameters with intervals, units and meanings (a resized one's with its nominal value),
+    and the estimator's caveat."""
+    if f.get("resized"):
+        return "; ".join(_calibrated_text(n, v) for n, v in f["parameters"].items())
+    intervals = f.get("intervals", {})
+    values = "; ".join(_named(n, _fmt(v) + (f" [{_fmt(intervals[n][0])}, {_fmt(intervals[n][1])}]"
+                                             if intervals.get(n) else ""))
+                       for n, v in f["parameters"].items())
+    caveat = f.get("in_the_estimator", {}).get("caveat")
+    return values + (f". <i>Caveat: {html.escape(caveat)}</i>" if caveat else "")
 
 
 def _summary(doc: dict) -> str:
     """The box a reader sees first: verdict, findings, moved parameters, what remains, what to record next."""
-    items = [f"<p class='verdict'><b>Verdict: {html.escape(doc['verdict'].replace('_', ' '))}.</b> "
-             f"{html.escape(VERDICT_TEXT[doc['verdict']])}</p>"]
+    items = [(f"<p class='verdict'><b>Verdict: {html.escape(doc['verdict'].replace('_', ' '))}.</b> "
+             f"{html.escape(VERDICT_TEXT[doc['verdict']])}</p>")]
     if doc["findings"]:
         items.append("<ul>" + "".join(f"<li>{_finding_line(f)}</li>" for f in doc["findings"]) + "</ul>")
     moved = [n for n in doc.get("beyond_tolerance", [])]
-    items.append("<p><b>Parameters beyond their tolerance:</b> " + (html.escape(", ".join(
-        f"{n} {_interval_text(doc['calibration'][n])}" for n in moved)) if moved else "none") + ".</p>")
+    items.append("<p><b>Parameters beyond their tolerance:</b> " + ("; ".join(
+        _calibrated_text(n, doc["calibration"][n]) for n in moved) if moved else "none") + ".</p>")
     items.append("<p><b>Unexplained:</b> " + (html.escape("; ".join(
-        f"{u['channel']} channel against {u['feature']} (held-out gain {u['held_out_gain']:.3g})"
+        f"{u['channel']} channel against {u['feature']} (held-out gain {_gain(u['held_out_gain'])})"
         for u in doc["unexplained"])) if doc["unexplained"] else "nothing") + ".</p>")
     if any(x["outliers_left_out"] for x in doc.get("screening", [])):  # hdjoint.io.screening
         items.append("<p><b>Outliers left out:</b> " + html.escape("; ".join(
@@ -217,16 +255,16 @@ def build(result, doc: dict) -> str:
     figs = []
     for c in diag.channels:
         before, after = diag.shown_residual(c, p0), diag.shown_residual(c, p1)
-        figs.append(_img(_figure(lambda ax: dp.residual_over_time(ax, rec.time, before, after, segs,
-                                                                   f"{c.name} residual")),
+        figs.append(_img(_figure(lambda ax, b=before, a=after, name=c.name: dp.residual_over_time(
+            ax, rec.time, b, a, segs, f"{name} residual")),
                          f"Residual of the {c.name} channel over time (located segments shaded)"))
-        figs.append(_img(_figure(lambda ax: dp.residual_vs_feature(ax, kin.omega_m, before, after,
-                                                                    "motor speed (rad/s)"), (6, 3)),
+        figs.append(_img(_figure(lambda ax, b=before, a=after: dp.residual_vs_feature(
+            ax, kin.omega_m, b, a, "motor speed (rad/s)"), (6, 3)),
                          f"{c.name}: mean residual vs motor speed (regime)"))
         orders = candidate_orders("theta_m", np.ptp(rec.theta_m))
         if orders:
-            figs.append(_img(_figure(lambda ax: dp.order_spectrum(ax, rec.theta_m, before, after, orders,
-                                                                   "theta_m"), (6, 3)),
+            figs.append(_img(_figure(lambda ax, b=before, a=after, k=orders: dp.order_spectrum(
+                ax, rec.theta_m, b, a, k, "theta_m"), (6, 3)),
                              f"{c.name}: order spectrum of the residual over the motor angle"))
     sections.append("<h2>Where the model and the recording differ</h2>" + "".join(figs))
 
@@ -244,26 +282,32 @@ def build(result, doc: dict) -> str:
     # Findings.
     if doc["findings"]:
         rows = [(f["effect"], f["kind"], f["where"]["part"], f"{f['p_value']:.2g}", f["confidence"],
-                 _fmt(f["fit"]["holdout_rms_before"]), _fmt(f["fit"]["holdout_rms_after"])) for f in doc["findings"]]
-        parts = ["<h2>Findings</h2>", _table(rows, ["effect", "kind", "part", "p-value", "confidence",
-                                                    "held-out RMS before (N.m)", "after (N.m)"])]
+                 _gain(f["evidence"]["held_out_gain"]) if "held_out_gain" in f["evidence"] else "",
+                 f["fit"]["channel"], _fmt(f["fit"]["holdout_rms_before"]), _fmt(f["fit"]["holdout_rms_after"]))
+                for f in doc["findings"]]
+        parts = ["<h2>Findings</h2>", EVIDENCE_TERMS,
+                 _table(rows, ["effect", "kind", "part", "p-value", "confidence", "held-out gain",
+                               "channel shown", "its held-out RMS before (N.m)", "after (N.m)"])]
         for f in doc["findings"]:
             ev = f["evidence"]
             text = (f"<h3>{html.escape(f['effect'])} ({html.escape(f['kind'])}, p = {f['p_value']:.2g})</h3>"
                     f"<p><b>Left out:</b> {html.escape(ev['physics_left_out'])}. <b>Model:</b> "
                     f"{html.escape(f['model'])}.</p><p><b>Where:</b> {html.escape(_where_text(f['where']))}.</p>")
             if "held_out_gain" in ev:
-                runner = (f"{ev['runner_up']['effect']} (held-out gain {100 * ev['runner_up']['held_out_gain']:.2f} %)"
+                runner = (f"{ev['runner_up']['effect']} (held-out gain {_gain(ev['runner_up']['held_out_gain'])})"
                           if ev["runner_up"] else "none")
+                better, compared = str(ev["folds_improved"]).split("/")
                 seen = (f" of {html.escape(ev['seen_on'])}, the torque channels together predicting no worse with "
                         "it (the encoders cannot tell it from an encoder's own error at that order)"
                         if ev.get("seen_on") else "")
-                text += (f"<p><b>Evidence:</b> held-out gain {100 * ev['held_out_gain']:.2f} %{seen} (z = {ev['z']}, "
-                         f"{ev['folds_improved']} folds better), p = {f['p_value']:.2g} against a simulated null, "
-                         f"ΔBIC {ev['delta_bic']}, runner-up {html.escape(runner)}.</p>")
+                text += (f"<p><b>Evidence:</b> held-out gain {_gain(ev['held_out_gain'])}{seen} (z = {ev['z']}; "
+                         f"better in {better} of {compared} held-out folds), p = {f['p_value']:.2g} against the "
+                         f"simulated null, ΔBIC {ev['delta_bic']}, runner-up {html.escape(runner)}.</p>")
             if f.get("separate_by"):
                 text += f"<p><b>Look-alikes:</b> {html.escape(f['separate_by'])}</p>"
-            parts.append(text + f"<p>{_finding_line(f)}</p>")
+            # Its values, not the summary's whole line again.
+            text += f"<p><b>{'Resized' if f.get('resized') else 'Fitted'}:</b> {_finding_values(f)}</p>"
+            parts.append(text)
         sections.append("".join(parts))
 
     # Fit before/after and the estimator.
@@ -294,8 +338,10 @@ def build(result, doc: dict) -> str:
                         cal, ["parameter", "unit", "meaning", "nominal", "estimate", "95 % interval", "tolerance", "z",
                               "identified"]))
     if doc["unexplained"]:
-        sections.append("<h2>Unexplained structure</h2>" + _table(
-            [(u["channel"], u["feature"], u["held_out_gain"], u["largest_at"]) for u in doc["unexplained"]],
+        sections.append("<h2>Unexplained structure</h2>" + ("" if doc["findings"] else EVIDENCE_TERMS) + _table(
+            [(u["channel"], u["feature"], _gain(u["held_out_gain"]) if u.get("held_out_gain") is not None else "",
+              u["largest_at"] if u.get("largest_at") not in (None, "", "-") else "not located")
+             for u in doc["unexplained"]],
             ["channel", "feature", "held-out gain", "largest at"]))
     if doc.get("detection_limits"):
         sections.append(_limits_section(doc["detection_limits"]))

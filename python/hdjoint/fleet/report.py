@@ -11,11 +11,12 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
-from hdjoint.io.figures import to_data_uri  # noqa: E402
-from hdjoint.fleet import store, trend  # noqa: E402
+from hdjoint.fleet import store, trend
+from hdjoint.io import parameters
+from hdjoint.io.figures import to_data_uri
 
 STYLE = ("body{font-family:sans-serif;max-width:1100px;margin:auto;padding:1em}"
          "table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #bbb;padding:2px 6px;"
@@ -37,15 +38,44 @@ def _html_table(header, body_rows, marked=()) -> str:
     return f"<table><tr>{head}</tr>{''.join(lines)}</table>"
 
 
+def _drifting(d) -> str:
+    """The drifting cell: yes, or no with the rule's part the joint misses (a significant change in
+    full view read "no" with no reason: it was below its tolerance)."""
+    s = d.strongest
+    if d.drifting:
+        return "yes"
+    if s is None:
+        return "no: nothing to test"
+    if not d.p_value < trend.ALPHA:
+        return f"no: p = {d.p_value:.2g}, not below {trend.ALPHA:g}"
+    return (f"no: significant, but {s.quantity} changes {100 * s.change:+.0f} %, under the "
+            f"{100 * s.needed:.0f} % its tolerance asks")
+
+
+def _quantity(name: str) -> tuple[str, str]:
+    """A tracked quantity's name for a reader (the symbol with its meaning) and its unit."""
+    if name in trend.KINEMATIC_TERMS:  # an amplitude over a revolution of eq. (7)'s and the extra slots' terms
+        return f"{name.replace('_', ' ')} (amplitude)", "rad"
+    info = parameters.table().get(name)
+    if info is None:
+        return name, ""
+    return f"{name} ({parameters.meaning(name)})", ("" if info.unit == "1" else info.unit)
+
+
+def _slope(s) -> str:
+    unit = _quantity(s.quantity)[1]
+    return f"{s.slope_per_day:.4g} {unit + '/' if unit else ''}day"
+
+
 def _ranking(drifts) -> str:
     body, marked = [], set()
     for i, d in enumerate(drifts):
         s = d.strongest
         if d.drifting:
             marked.add(i)
-        body.append((i + 1, d.joint, d.p_value, "yes" if d.drifting else "no",
-                     d.effect if s else "", s.quantity if s else "", d.direction,
-                     100 * s.change if s else math.nan, s.slope_per_day if s else math.nan,
+        body.append((i + 1, d.joint, d.p_value, _drifting(d),
+                     d.effect if s else "", _quantity(s.quantity)[0] if s else "", d.direction,
+                     100 * s.change if s else math.nan, _slope(s) if s else "",
                      len(d.trends)))
     return ("<h2>Joints ranked by drift</h2>"
             f"<p>Trend test: weighted least-squares slope t-test of each tracked quantity against time (weights "
@@ -55,11 +85,12 @@ def _ranking(drifts) -> str:
             f"parameter's tolerance (or {trend.RELEVANT_CHANGE:.0%} of its first value where none is stated), so "
             f"a joint without drift is flagged with probability at most {trend.ALPHA:.0%} (measured false-alarm "
             f"rate: docs/fleet.md). Ranking: drifting joints first, then each group by its p-value (smallest "
-            f"first); the effect and quantity shown are those of the joint's smallest p-value, so a joint that is "
-            f"not drifting may show a large change that is not significant, or a significant one below its "
+            f"first); the effect and quantity shown are the joint's strongest trend: one whose change reaches its "
+            f"tolerance before any other, then the smallest p-value. A joint that is not drifting says which part "
+            f"of the rule it misses: a large change that is not significant, or a significant one below its "
             f"tolerance.</p>"
             + _html_table(("rank", "joint", "drift p", "drifting", "effect", "quantity", "direction",
-                           "change over the period (%)", "slope per day", "quantities tested"), body, marked))
+                           "change over the period (%)", "slope", "quantities tested"), body, marked))
 
 
 def _joint_figure(joint: str, joint_rows: list[dict], drift) -> str:
@@ -68,7 +99,8 @@ def _joint_figure(joint: str, joint_rows: list[dict], drift) -> str:
     if not ok or not shown:
         return ""
     days = trend._days([r.get("date") for r in ok])
-    labels = {tr.quantity: f"{tr.quantity} (p = {tr.p_value:.2g})" for tr in drift.trends}
+    labels = {tr.quantity: f"{tr.quantity}" + (f" ({_quantity(tr.quantity)[1]})" if _quantity(tr.quantity)[1] else "")
+              + f", p = {tr.p_value:.2g}" for tr in drift.trends}
     cols = min(3, len(shown))
     nrows = math.ceil(len(shown) / cols)
     fig, axes = plt.subplots(nrows, cols, figsize=(3.6 * cols, 2.6 * nrows), constrained_layout=True, squeeze=False)
@@ -131,9 +163,9 @@ def build(found: list[dict]) -> str:
         by_joint.setdefault(str(r.get("joint")), []).append(r)
     commands = sorted({html.escape(str(r.get("command"))) for r in found})
     ok = sum(r.get("status") == "ok" for r in found)
-    sections = [f"<h1>Fleet report</h1><p>{len(found)} recordings of {len(by_joint)} joints ({', '.join(commands)}): "
+    sections = [(f"<h1>Fleet report</h1><p>{len(found)} recordings of {len(by_joint)} joints ({', '.join(commands)}): "
                 f"{ok} done, {len(found) - ok} failed. Written "
-                f"{datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC.</p>"]
+                f"{datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC.</p>")]
     if any(d.trends for d in drifts):
         sections.append(_ranking(drifts))
         sections.append("<h2>Parameters over time, per joint</h2>")

@@ -37,7 +37,10 @@ class Summary:
 class Progress:
     """One line over the recordings: done / failed / remaining and an ETA."""
 
-    def __init__(self, total: int, cached: int, stream=sys.stderr, enabled: bool = True):
+    def __init__(self, total: int, cached: int, stream=None, enabled: bool = True):
+        # sys.stderr as it is now: a default bound at import kept the stream of whoever imported this
+        # module first (a test's capture, closed after it: "I/O operation on closed file" on every later run).
+        stream = sys.stderr if stream is None else stream
         self.total, self.cached, self.stream, self.enabled = total, cached, stream, enabled
         self.done = self.failed = 0
         self.start = time.monotonic()
@@ -126,7 +129,7 @@ def compute(client, command: str, jobs: list[Job], keys: list[str], out: str, op
         job, key = futures.pop(f)
         try:
             row = f.result()
-        except Exception as e:  # KilledWorker after allowed-failures deaths, or cancelled: not stored, retried next run
+        except Exception as e:  # noqa: BLE001 (KilledWorker after allowed-failures deaths, or cancelled: not stored, retried next run)
             row = _failed_row(command, job, key, f"{type(e).__name__}: {e}")
         f.release()
         found.append(row)
@@ -200,6 +203,7 @@ def _run_locked(command, jobs, out, scheduler, workers, options, client, allowed
 
 def write_parquet(out: str, found: list[dict]) -> Path:
     import io
+
     import pyarrow.parquet as pq
     buf = io.BytesIO()
     pq.write_table(rows.table(found), buf)

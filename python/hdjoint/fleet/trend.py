@@ -62,6 +62,7 @@ class Trend:
     t: float
     p_value: float     # two-sided, of this quantity alone
     relevant: bool     # the change reaches the tolerance (or RELEVANT_CHANGE)
+    needed: float = math.nan  # the change that is relevant, relative to the first value (as `change`)
 
 
 @dataclass(frozen=True)
@@ -169,7 +170,8 @@ def joint_trend(joint: str, joint_rows: list[dict]) -> JointDrift:
             f"param.{name}.tol" in r for r in ok) else math.nan
         threshold = tolerance if math.isfinite(tolerance) and tolerance > 0 else RELEVANT_CHANGE * abs(first)
         trends.append(Trend(name, int(keep.sum()), slope, math.copysign(moved, slope) / abs(first) if first
-                            else math.nan, t, p, bool(moved >= threshold)))
+                            else math.nan, t, p, bool(moved >= threshold),
+                            threshold / abs(first) if first else math.nan))
     if not trends:
         return JointDrift(joint, math.nan, False, None, ())
     strongest = min(trends, key=lambda tr: (not tr.relevant, tr.p_value, -abs(tr.t)))

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -71,6 +72,13 @@ def unit_in_text(unit: str) -> str:
     return "" if unit == "1" else f" {unit}"
 
 
+def meaning(name: str) -> str:
+    """A parameter's description cut to its first clause, to stand beside its symbol in a report
+    (a clause that only points at an equation goes: "..., the nominal tau_fm of eq. (2)")."""
+    first = re.split(r"; |: | \(|, eq\.", table()[name].description)[0]
+    return re.sub(r",[^,]* eq\.$", "", first)
+
+
 def values_in_text(values: dict[str, float]) -> str:
     """'omega_s = 20 rad/s, Kt_warmup_tc = 10 s': parameter values in a sentence."""
     return ", ".join(f"{n} = {v:.3g}{unit_in_text(table()[n].unit)}" for n, v in values.items())
@@ -103,7 +111,7 @@ def for_estimator(params: dict[str, float]) -> dict[str, float]:
     if len(out) < len(params):
         info = table()
         for k in params:
-            info[k]  # noqa: B018 (an unknown name raises, as it always did)
+            info[k]  # an unknown name raises, as it always did
     return out
 
 
@@ -272,7 +280,12 @@ def load_tolerances(path: str | os.PathLike | None) -> dict[str, float]:
 
 
 def _atomic_write(path: str | os.PathLike, text: str) -> None:
-    from hdjoint.io.outputs import check_replaceable, replace_into, temp_path, write_error
+    from hdjoint.io.outputs import (
+        check_replaceable,
+        replace_into,
+        temp_path,
+        write_error,
+    )
     check_replaceable(path)  # never over a device node, a FIFO or a read-only file
     tmp = temp_path(path)
     try:
@@ -296,8 +309,8 @@ def save_ssv(path: str | os.PathLike, params: dict[str, float], name: str = "hdj
     """Write SSP 1.0 parameter values (.ssv) for the same set."""
     info = table()
     lines = ['<?xml version="1.0" encoding="UTF-8"?>',
-             f'<ssv:ParameterSet xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues"'
-             f' version="1.0" name={quoteattr(name)}>',
+             (f'<ssv:ParameterSet xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues"'
+             f' version="1.0" name={quoteattr(name)}>'),
              "  <ssv:Parameters>"]
     for key, value in check(params).items():
         unit = f" unit={quoteattr(info[key].unit)}" if info[key].unit != "1" else ""
