@@ -1,17 +1,13 @@
 """A finding whose fitted parameters are not physical is not a finding
 (issue 38, goal 5): each effect judges its own fit against the recording's
-scale (Effect.degenerate), and search.py hands it the scale of the real
-recording, encoder counts included."""
-import pytest
+scale (Effect.degenerate: its torsion and length)."""
 
 from hdjoint.diagnosis.effects import EFFECTS
 from hdjoint.diagnosis.effects.base import RecordingScale
-from hdjoint.diagnosis.objective import torsion_count
 from hdjoint.io import parameters
 
-SCALE = RecordingScale(torsion_span=2e-3, duration=30.0, torsion_count=1.2e-5)
+SCALE = RecordingScale(torsion_span=2e-3, duration=30.0)
 THERMAL = EFFECTS["thermal_drift"]
-HYSTERESIS = EFFECTS["hysteresis"]
 
 
 def thermal(**fitted) -> dict:
@@ -42,23 +38,3 @@ def test_a_time_constant_is_not_read_where_the_kt_term_carries_nothing():
 def test_friction_driven_through_zero_is_not_a_warm_up():
     why = THERMAL.degenerate(thermal(Fc_drift=-0.05), SCALE)  # 1 - 0.05/s * 30 s < 0
     assert why is not None and "through zero" in why
-
-
-def hysteresis(height: float, slope: float) -> dict:
-    return dict(parameters.defaults(), hys_H=height, hys_sigma=slope)
-
-
-def test_a_loop_switching_within_an_encoder_count_is_not_shown_as_a_loop():
-    p = hysteresis(0.1, 0.1 / 5e-6)  # switches over 5e-6 rad, under the count of 1.2e-5 rad
-    why = HYSTERESIS.degenerate(p, SCALE)
-    assert why is not None and "encoder count" in why
-    assert HYSTERESIS.degenerate(hysteresis(0.1, 0.1 / 5e-5), SCALE) is None  # four counts wide: a loop
-
-
-@pytest.mark.parametrize("motor_counts, link_counts, count", [
-    (4096, 524288, 2 * 3.141592653589793 / (4096 * 100)),     # the table's: a motor count through N = 100 is coarser
-    (2 ** 20, 524288, 2 * 3.141592653589793 / 524288),        # a fine motor encoder: the 19-bit link one is coarser
-    (0, 0, 0.0)])                                              # unquantised (a simulation's exact angles)
-def test_the_torsion_count_is_the_coarser_encoders_step(motor_counts, link_counts, count):
-    p = dict(parameters.defaults(), N=100.0, motor_counts=motor_counts, link_counts=link_counts)
-    assert torsion_count(p) == pytest.approx(count)

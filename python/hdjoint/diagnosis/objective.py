@@ -34,11 +34,6 @@ def _typical_size(name: str, value: float) -> float:
     return max(abs(float(value)), floor, 1e-12)
 
 
-def torsion_count(p: dict) -> float:
-    """The smallest torsion theta_m/N - theta_l the encoders resolve: one count of the coarser, rad."""
-    return max(parameters.encoder_step(p["motor_counts"]) / p["N"], parameters.encoder_step(p["link_counts"]))
-
-
 class Objective:
     """The objective over a Setup; it reads the setup's fields as its own
     (rec, prep, channels, fold, train, test, ...)."""
@@ -251,7 +246,7 @@ class Objective:
     def recording_scale(self, p: dict) -> RecordingScale:
         """What a fitted effect is judged physical against (Effect.degenerate)."""
         time = self.rec.time[self.used]
-        return RecordingScale(self.torsion_span(p), float(time[-1] - time[0]) if len(time) else 0.0, torsion_count(p))
+        return RecordingScale(self.torsion_span(p), float(time[-1] - time[0]) if len(time) else 0.0)
 
     def torsion_span(self, p: dict) -> float:
         """The torsion of the recording (5-95 %), rad: the smaller of what the

@@ -35,11 +35,9 @@ TABLE_JOINT = "the parameter table's SHD-17-100-class joint"
 @dataclass(frozen=True)
 class RecordingScale:
     """What a fitted effect is judged physical against: the recording's
-    torsion (5-95 %, rad), its length (s) and the smallest torsion its
-    encoders resolve (one count of the coarser of the two, rad)."""
+    torsion (5-95 %, rad) and its length (s)."""
     torsion_span: float
     duration: float
-    torsion_count: float
 
 
 @dataclass(frozen=True)
