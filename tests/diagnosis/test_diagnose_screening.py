@@ -207,3 +207,19 @@ def test_a_residual_the_findings_leave_unchanged_is_drawn_visibly_and_said_so():
     plots.residual_over_time(ax, t, y, 0.5 * y, [], "transmission residual")
     assert [line.get_label() for line in ax.get_lines()] == ["calibrated nominal model", "corrected model"]
     plt.close(fig)
+
+
+def test_a_controllers_own_sharp_current_samples_are_kept_not_refused():
+    """The independent truth's position controller answers each motor
+    encoder count with a one-sample current spike near a reversal: hundreds
+    in a 30 s run, far more than a few wild samples. They are the channel's
+    own: screening keeps it as recorded and says so (it refused the recording
+    as too noisy, and the independent benchmark stopped at its first case)."""
+    from diagnosis_independent import CONTROL_CASES, draw, record
+    from hdjoint.io.screening import MAX_OUTLIER_SHARE, screen
+    rec = record(draw(CONTROL_CASES[0], 0, 30.0), 0)
+    assert len(find_outliers(rec.i_m, rec.time)) > MAX_OUTLIER_SHARE * len(rec.i_m)
+    kept, found = screen(rec)
+    assert np.array_equal(kept.i_m, rec.i_m) and not found.outliers
+    assert found.kept_as_recorded["i_m"] > 30
+    assert "i_m kept as recorded" in found.summary() and found.as_dict()["kept_as_recorded"] == found.kept_as_recorded

@@ -90,8 +90,8 @@ def diagnosis_lines(doc: dict) -> list[str]:
     """What `hdjoint diagnose` prints of its findings document."""
     from hdjoint.diagnosis.validation import summary_line
     lines = [f"verdict: {doc['verdict']}"]
-    lines += [f"  screening: {s['recording']}: {s['summary']}" for s in doc.get("screening", [])
-              if s["outliers_left_out"]]
+    from hdjoint.io.screening import found_anything
+    lines += [f"  screening: {s['recording']}: {s['summary']}" for s in doc.get("screening", []) if found_anything(s)]
     for f in doc["findings"]:
         fit = f["fit"]
         lines.append(f"  {f['effect']:<28} {f['where']['part']:<13} confidence {f['confidence']:.2f}  held-out RMS "

@@ -22,6 +22,7 @@ from hdjoint.diagnosis.rules import (
 from hdjoint.diagnosis.structure import candidate_orders
 from hdjoint.io.figures import to_data_uri
 from hdjoint.io.parameters import unit_in_text, values_in_text
+from hdjoint.io.screening import found_anything
 
 VERDICT_TEXT = {
     "missing_physics": "Physics is missing from the nominal model: the findings below name it, model it and "
@@ -158,9 +159,9 @@ def _summary(doc: dict) -> str:
     items.append("<p><b>Unexplained:</b> " + (html.escape("; ".join(
         f"{u['channel']} channel against {u['feature']} (held-out gain {_gain(u['held_out_gain'])})"
         for u in doc["unexplained"])) if doc["unexplained"] else "nothing") + ".</p>")
-    if any(x["outliers_left_out"] for x in doc.get("screening", [])):  # hdjoint.io.screening
-        items.append("<p><b>Outliers left out:</b> " + html.escape("; ".join(
-            f"{x['recording'] or 'recording'}: {x['summary']}" for x in doc["screening"] if x["outliers_left_out"]))
+    if any(found_anything(x) for x in doc.get("screening", [])):
+        items.append("<p><b>Screening:</b> " + html.escape("; ".join(
+            f"{x['recording'] or 'recording'}: {x['summary']}" for x in doc["screening"] if found_anything(x)))
             + ".</p>")
     if doc.get("cannot_tell"):
         items.append("<p><b>This recording cannot tell:</b> " + html.escape("; ".join(

@@ -40,7 +40,9 @@ OUTLIER_Z = 12.0        # robust standard deviations of the distance to the runn
 OUTLIER_COUNTS = 20.0   # steps of the channel's resolution
 OUTLIER_BENDS = 8.0     # times the signal's own local second difference
 LOCAL = 21              # samples over which that is taken
-# More outliers than this share of the samples is not a wild sample or two but a noisy channel: refused.
+# More outliers than this share of the samples is not a wild sample or two
+# but the channel's own sharp features (a controller's D-term answering each
+# encoder count, a current loop's ripple): the channel is kept as recorded.
 MAX_OUTLIER_SHARE = 0.001
 MIN_OUTLIERS_ALLOWED = 10
 WRAP_JUMP = math.pi     # rad between consecutive samples: an encoder that wraps
@@ -65,6 +67,8 @@ class Screening:
     """What screening found in one recording."""
     path: str | None
     outliers: list[Outlier] = field(default_factory=list)
+    # Channels with too many sharp samples to be wild ones: kept as recorded (channel -> how many).
+    kept_as_recorded: dict[str, int] = field(default_factory=dict)
 
     def counts(self) -> dict[str, int]:
         found = {name: 0 for name in CHANNELS}
@@ -75,21 +79,29 @@ class Screening:
     def as_dict(self, listed: int = 20) -> dict:
         """For findings.json: counts per channel and the first LISTED outliers (strict JSON)."""
         return {"recording": self.path, "outliers_left_out": len(self.outliers), "by_channel": self.counts(),
-                "summary": self.summary(),
+                "summary": self.summary(), "kept_as_recorded": dict(self.kept_as_recorded),
                 "outliers": [{"channel": o.channel, "line": o.line, "time": o.time,
                               "value": _json_number(o.value), "replaced_by": o.replaced_by}
                              for o in self.outliers[:listed]]}
 
     def summary(self) -> str:
         """One sentence: how many outliers, in which channels, where (the first lines)."""
+        kept = "; ".join(f"{channel} kept as recorded: {n} sharp samples are its own, not a few wild ones"
+                         for channel, n in self.kept_as_recorded.items())
         if not self.outliers:
-            return "no outliers"
+            return kept or "no outliers"
         parts = []
         for channel, n in self.counts().items():
             lines = [o.line for o in self.outliers if o.channel == channel]
             shown = ", ".join(map(str, lines[:5])) + (", ..." if len(lines) > 5 else "")
             parts.append(f"{n} in {channel} (line{'s' if n > 1 else ''} {shown})")
-        return f"{len(self.outliers)} outlier{'s' if len(self.outliers) > 1 else ''} left out: " + "; ".join(parts)
+        left_out = f"{len(self.outliers)} outlier{'s' if len(self.outliers) > 1 else ''} left out: " + "; ".join(parts)
+        return f"{left_out}; {kept}" if kept else left_out
+
+
+def found_anything(entry: dict) -> bool:
+    """A findings.json screening entry says more than "no outliers"."""
+    return bool(entry["outliers_left_out"] or entry.get("kept_as_recorded"))
 
 
 def _json_number(x: float):
@@ -240,9 +252,8 @@ def screen(rec: Recording, line_of=None) -> tuple[Recording, Screening]:
         bad = find_outliers(x, rec.time)
         limit = max(MIN_OUTLIERS_ALLOWED, int(MAX_OUTLIER_SHARE * len(x)))
         if len(bad) > limit:
-            raise Degenerate(f"{_where(rec)}: column {name}: {len(bad)} samples stand far out of their neighbours "
-                             f"(first at line {line_of(int(bad[0]))}); more than {limit} is not a few wild samples "
-                             "but a channel too noisy or too coarse to diagnose")
+            found.kept_as_recorded[name] = len(bad)
+            continue
         if len(bad):
             filled = _fill(x, bad)
             found.outliers += [Outlier(name, int(k), int(line_of(int(k))), float(rec.time[k]), float(x[k]),

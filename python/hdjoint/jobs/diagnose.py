@@ -80,7 +80,7 @@ def screened_recordings(recs):
             check_not_degenerate(rec)  # a channel that only a wild sample made vary
         except Degenerate as e:
             raise UserError(str(e)) from None
-        if screening.outliers:
+        if screening.outliers or screening.kept_as_recorded:
             _progress(f"{rec.path}: {screening.summary()}")
         cleaned.append(rec)
         found.append(screening)
