@@ -18,7 +18,8 @@ from hdjoint.diagnosis.effects import EFFECTS, Effect, owner
 from hdjoint.diagnosis.hypotheses import Finding
 from hdjoint.diagnosis.objective import Objective
 from hdjoint.diagnosis.prepare import unresolved_harmonics
-from hdjoint.diagnosis.rules import EVIDENCE_Z, FALSE_DISCOVERY_RATE, GROSS_CHECKED, GROSS_FACTOR, MIN_GAIN, RESIZE_Z
+from hdjoint.diagnosis.rules import (EVIDENCE_Z, FALSE_DISCOVERY_RATE, GROSS_CHECKED, GROSS_FACTOR, HYPOTHESIS_FTOL,
+                                     MIN_GAIN, RESIZE_Z)
 from hdjoint.diagnosis.select import Selection
 from hdjoint.diagnosis.structure import held_out_gain_sq
 from hdjoint.io import parameters
@@ -121,7 +122,10 @@ def released(objective: Objective, selection: Selection, calibration: dict[str, 
     wide = {n: Prior(objective.priors[n].centre, GROSS_FACTOR * max(abs(objective.priors[n].centre),
                                                                     objective.priors[n].std)) for n in names}
     objective.say(f"refitting {', '.join(names)} with their priors {GROSS_FACTOR:g} times their nominal value wide")
-    jointly = objective.with_priors(wide).fit(p, free, objective.channels)
+    # Judged to HYPOTHESIS_FTOL, as hypotheses are: a released parameter far
+    # off wanders for many steps before a 1e-8 change of the cost, each step
+    # a finite-difference Jacobian over every calibrated parameter.
+    jointly = objective.with_priors(wide).fit(p, free, objective.channels, ftol=HYPOTHESIS_FTOL)
     candidates = []
     for n in names:
         c = calibration[n]
@@ -131,7 +135,8 @@ def released(objective: Objective, selection: Selection, calibration: dict[str, 
     findings, unexplained = [], []
     for n in candidates:
         prior = objective.priors[n]
-        unheld = objective.with_priors({n: wide[n]}).fit(p, free, objective.channels)
+        unheld = objective.with_priors({n: wide[n]}).fit(dict(p, **{n: jointly.params[n]}), free, objective.channels,
+                                                          ftol=HYPOTHESIS_FTOL)
         estimate = unheld.params[n]
         if abs(estimate - prior.centre) <= RESIZE_Z * prior.std:
             continue
@@ -140,7 +145,7 @@ def released(objective: Objective, selection: Selection, calibration: dict[str, 
                           "times either way: another part, not this one mis-sized (degenerate)")
             continue
         edge = prior.centre + math.copysign(RESIZE_Z * prior.std, estimate - prior.centre)
-        held = objective.fit(dict(p, **{n: edge}), [m for m in free if m != n], objective.channels)
+        held = objective.fit(dict(p, **{n: edge}), [m for m in free if m != n], objective.channels, ftol=HYPOTHESIS_FTOL)
         gain = held_out_gain_sq(objective.at_measured_noise(held.params), objective.at_measured_noise(unheld.params),
                                 objective.fold, objective.test)
         p_value = float(norm.sf(gain.z))
