@@ -134,7 +134,7 @@ def remaining_structure(diag, p) -> list[dict]:
         "motor speed": (regime(kin.omega_m), None, "rad/s"),
         "motor acceleration": (regime(kin.alpha_m), None, "rad/s2"),
         "torque level": (reference, None, "N.m"),
-        "torque, loading vs unloading": (reference + 1e4 * (loading > 0), None, "N.m (+1e4 when loading)"),
+        "torque, loading vs unloading": (reference + LOADING_CODE * (loading > 0), None, "N.m", _loading_bin),
         "motor angle (one revolution)": (rec.theta_m, 2 * np.pi, "rad"),
         "link angle": (rec.theta_l, None, "rad"),
     }
@@ -160,6 +160,19 @@ def remaining_structure(diag, p) -> list[dict]:
             found.append({"channel": c.name, "feature": s.feature, "held_out_gain": round(s.gain.gain, 4),
                           "z": round(s.gain.z, 1), "p_value": p_adj, "largest_at": s.peak_at})
     return found
+
+
+# The loading-vs-unloading feature codes loading samples as torque + LOADING_CODE (N.m), far beyond any joint's torque.
+LOADING_CODE = 1e4
+
+
+def _loading_bin(lo: float, hi: float) -> str:
+    """A bin of the coded loading feature in words: its torque and whether loading."""
+    if lo >= LOADING_CODE / 2:
+        return f"{lo - LOADING_CODE:.3g} to {hi - LOADING_CODE:.3g} N.m while loading"
+    if hi <= LOADING_CODE / 2:
+        return f"{lo:.3g} to {hi:.3g} N.m while unloading"
+    return "torques across loading and unloading"
 
 
 def estimator_comparison(diag, corrected) -> dict | None:

@@ -117,14 +117,16 @@ class Structure:
 
 def scan(residual, features: dict, fold, train, test) -> list[Structure]:
     """Binned-mean scans over named features; returns them sorted by held-out gain.
-    `features` maps name -> (values, circular period or None, unit)."""
+    `features` maps name -> (values, circular period or None, unit), or with
+    a fourth item that words a bin (lo, hi) for a feature whose values are coded."""
     found = []
     centred = residual - np.nanmean(residual[train])
-    for name, (values, period, unit) in features.items():
+    for name, (values, period, unit, *words) in features.items():
         pred, edges, means = binned_prediction(values, centred, train, circular_period=period)
         gain = held_out_gain(centred, pred, fold, test)
         k = int(np.argmax(np.abs(means))) if len(means) else 0
-        where = f"{edges[k]:.3g} to {edges[k + 1]:.3g} {unit}" if len(edges) > k + 1 else ""
+        bin_text = words[0] if words else (lambda lo, hi: f"{lo:.3g} to {hi:.3g} {unit}")
+        where = bin_text(edges[k], edges[k + 1]) if len(edges) > k + 1 else ""
         found.append(Structure(name, gain, where, edges, means, bins_of(values, centred, circular_period=period)[0]))
     return sorted(found, key=lambda s: -s.gain.gain)
 
