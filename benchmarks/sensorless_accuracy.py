@@ -145,8 +145,8 @@ def run(job: tuple[str, int], duration: float = DURATION) -> dict:
         shares = {s: (round(_share(tmp / f"{s}.csv", truth, span), 5) if (tmp / f"{s}.csv").exists() else None)
                   for s in SETS}
     # Where the calibration put each parameter, beside the truth's value (to tell why it helped or hurt).
-    moved = {n: {"nominal": e["nominal"], "estimate": e["estimate"], "used": e["used"],
-                 "identified": e["identified"], "truth": joint.truth.get(n)}
+    moved = {n: {"nominal": e["nominal"], "estimate": e["estimate"], "lo": e.get("lo"), "hi": e.get("hi"),
+                 "used": e["used"], "identified": e["identified"], "truth": joint.truth.get(n)}
              for n, e in document["parameters"].items() if n != "a0"}
     return {"case": name, "seed": seed, "far_off": case.far_off, "duration": duration,
             "excitations": [s.excitation for s in joint.setups[:2]], "load": joint.setups[1].load,
