@@ -228,7 +228,7 @@ def write_table(rows: list[dict]) -> str:
              + " / ".join(f"{100 * np.median(_scored(rows, s)):.2f}" for s in COLUMNS) + " |",
              "| worst error: " + " / ".join(COLUMNS) + " (% of span) | "
              + " / ".join(f"{100 * max(_scored(rows, s), default=float('nan')):.2f}" for s in COLUMNS) + " |",
-             f"| calibrated (jobs/calibrate.py's rule) against moving identified parameters only | "
+             "| calibrated (jobs/calibrate.py's rule) against moving identified parameters only | "
              + f"{_against_earlier_rule(rows)} |", "",
              ("Far off: the nominal set lacks gravity, the flexspline is 2.5x softer, or the link 40 % heavier. "
               "Calibrated: an unidentified parameter keeps its nominal value unless its interval excludes it; "
