@@ -32,6 +32,8 @@ from threadpoolctl import threadpool_limits
 from hdjoint.app import cli
 from hdjoint.io import parameters
 from hdjoint.io.recording import write_recording
+from hdjoint.jobs.calibrate import placed_on
+from hdjoint.jobs.inputs import read_recording
 from hdjoint_truth.cases import EFFECT_CASES, JITTERED, TruthCase, draw, record
 
 import diagnosis_independent as independent
@@ -114,11 +116,12 @@ def _estimate(*args: str) -> None:
 
 
 def _identified_only(tmp: Path, document: dict) -> None:
-    """tau_hat with the calibrated set but every unidentified parameter at nominal (the earlier rule)."""
+    """tau_hat with the calibrated set but every unidentified parameter at nominal (the earlier rule),
+    the encoder zero placed anew on the run for that set, as calibrate-from places it."""
     params = parameters.load(tmp / "calibrated.params.json")
     for name, entry in document["parameters"].items():
-        if name != "a0":
-            params[name] = entry["estimate"] if entry["identified"] else entry["nominal"]
+        params[name] = entry["estimate"] if entry["identified"] else entry["nominal"]
+    params = placed_on(read_recording(str(tmp / "run.csv")), params)
     parameters.save(tmp / "identified_only.json", params)
     _estimate(str(tmp / "run.csv"), "--params", str(tmp / "identified_only.json"),
               "-o", str(tmp / f"{IDENTIFIED_ONLY}.csv"))
