@@ -119,14 +119,19 @@ def _draw_setup(rng, excitation: str, duration: float, seed: int, sensor: Curren
         stamp_actual_times=bool(rng.random() < 0.5), seed=seed)
 
 
-def draw(case: TruthCase, seed: int, duration: float = 30.0, recordings: int = 2, size: float = 1.0) -> Joint:
+def draw(case: TruthCase, seed: int, duration: float = 30.0, recordings: int = 2, size: float = 1.0,
+         errors: dict[str, float] | None = None) -> Joint:
     """The truth joint of `case` for `seed`, and its recordings' setups; its
-    effects at `size` times their concealed size."""
+    effects at `size` times their concealed size; each JITTERED parameter off
+    the nominal value by up to `errors[name]` (relative; NOMINAL_ERROR where
+    not given)."""
     rng = _rng(case, seed)
     nominal = nominal_for(case)
     truth = dict(parameters.defaults())
+    errors = errors or {}
     for name in JITTERED:
-        truth[name] *= float(1.0 + rng.uniform(-NOMINAL_ERROR, NOMINAL_ERROR))
+        bound = errors.get(name, NOMINAL_ERROR)
+        truth[name] *= float(1.0 + rng.uniform(-bound, bound))
     truth["Df"] = float(rng.uniform(2.0, 8.0))  # structural damping: the nominal model has none
     form = _draw_form(rng, case.present, nominal["Jm"])
     sensor = CurrentSensor(gain_error=float(rng.uniform(-0.02, 0.02)), offset=float(rng.uniform(-0.01, 0.01)),

@@ -88,6 +88,33 @@ EXCITATIONS = {"paper": paper, "multisine": multisine, "sweep": sweep, "constant
                "chirp": chirp}
 
 
+def payload_steps(t):
+    """External link torque (N.m): a payload changing every 5 s, each change over 50 ms."""
+    levels, hold, rise = np.array([0.0, 1.2, -0.8, 2.0, 0.4, -1.5, 0.8]), 5.0, 0.05
+    k = np.minimum((t // hold).astype(int), len(levels) - 1)
+    s, _, _ = _smoothstep((t - k * hold) / rise)
+    before = levels[np.maximum(k - 1, 0)]
+    return before + (levels[k] - before) * s
+
+
+def contact_pushes(t):
+    """External link torque (N.m): 0.6 s raised-cosine pushes every 3.1 s, alternating 2.5 and -1.5 N.m."""
+    k = np.floor(t / 3.1)
+    x = (t - k * 3.1) / 0.6
+    pulse = np.where(x < 1.0, 0.5 * (1.0 - np.cos(2.0 * math.pi * np.clip(x, 0.0, 1.0))), 0.0)
+    return 2.5 * pulse * np.where(k % 2 == 0, 1.0, -0.6)
+
+
+# What pushes on the link besides the joint, unknown to controller and estimators ("": nothing).
+LOADS = {"": np.zeros_like, "payload": payload_steps, "contact": contact_pushes}
+
+
+def external_load(kind: str, t: np.ndarray) -> np.ndarray:
+    if kind not in LOADS:
+        raise ValueError(f"unknown external load {kind!r}; known: {', '.join(k for k in LOADS if k)}")
+    return LOADS[kind](np.asarray(t, float))
+
+
 def reference(kind: str, t: np.ndarray, scale: float = 1.0):
     if kind not in EXCITATIONS:
         raise ValueError(f"unknown excitation {kind!r}; known: {', '.join(EXCITATIONS)}")

@@ -22,7 +22,7 @@ import numpy as np
 
 from hdjoint.io.recording import Recording
 from hdjoint_truth import physics
-from hdjoint_truth.excitations import reference
+from hdjoint_truth.excitations import external_load, reference
 from hdjoint_truth.physics import Form
 from hdjoint_truth.sensors import CurrentSensor, Encoder, sample_offsets
 
@@ -52,6 +52,7 @@ class Setup:
     with_torque_sensor: bool = True          # False: the recording has no tau_sensor column
     jitter: float = 0.0                      # s, samples taken up to this late
     stamp_actual_times: bool = False         # log the jittered instants (else the nominal ones)
+    load: str = ""                           # external link torque (excitations.LOADS), unknown to the controller
     seed: int = 1
 
 
@@ -130,17 +131,17 @@ class _Plant:
         th = math.tanh(self.omega_m / f.omega_fc)
         return g * th + self.Bm * self.omega_m, g / f.omega_fc * (1.0 - th * th) + self.Bm
 
-    def step(self, h: float, current: float, t: float) -> None:
+    def step(self, h: float, current: float, t: float, tau_ext: float = 0.0) -> None:
         p, f = self.p, self.form
         x = self.geometric()
         self.x_rate, self.x_prev = (x - self.x_prev) / h, x
         tau_f = self.tau_f = self.transmitted()
         drive = physics.motor_torque_constant(p, f, t) * current + physics.cogging(p, self.theta_m)
-        load = physics.link_load(p, f, self.theta_l, self.omega_l)
+        load = physics.link_load(p, f, self.theta_l, self.omega_l) - tau_ext
         fl = p.get("Fl", 0.0)
         c_l = p["Bl"] + (fl / f.link_omega_fc / math.cosh(self.omega_l / f.link_omega_fc) ** 2 if fl else 0.0)
         if f.integrator == "heun":
-            self._heun(h, current, t, drive, tau_f, load)
+            self._heun(h, current, t, drive, tau_f, load, tau_ext)
             return
         if f.friction == "lugre":
             s0, s1 = f.lugre_sigma0, f.lugre_sigma1
@@ -165,7 +166,7 @@ class _Plant:
         self.theta_l += h * wl
         self._hysteresis(self.x_rate, h)
 
-    def _heun(self, h, current, t, drive, tau_f, load):
+    def _heun(self, h, current, t, drive, tau_f, load, tau_ext):
         """Explicit second order (tanh friction only: no bristle state to keep stable)."""
         fric, _ = self._motor_friction(t)
         a_m = (drive - fric - tau_f / self.N) / self.Jm
@@ -178,7 +179,7 @@ class _Plant:
             + physics.cogging(self.p, self.theta_m)
         fric_2, _ = self._motor_friction(t + h)
         a_m2 = (drive_2 - fric_2 - tau_2 / self.N) / self.Jm
-        a_l2 = (tau_2 - physics.link_load(self.p, self.form, self.theta_l, self.omega_l)) / self.Jl
+        a_l2 = (tau_2 - physics.link_load(self.p, self.form, self.theta_l, self.omega_l) + tau_ext) / self.Jl
         self.theta_m = s0[0] + 0.5 * h * (s0[1] + self.omega_m)
         self.theta_l = s0[2] + 0.5 * h * (s0[3] + self.omega_l)
         self.omega_m = s0[1] + 0.5 * h * (a_m + a_m2)
@@ -209,6 +210,7 @@ def simulate(truth: dict, form: Form, setup: Setup, nominal: dict) -> Recording:
     n = int(round(setup.duration / ts)) + 1
     t = np.arange(n) * ts
     th_ref, om_ref, al_ref = reference(setup.excitation, t, setup.scale)
+    pushed = external_load(setup.load, t)
     N, Kt = nominal["N"], nominal["Kt"]
     feed_forward = ((nominal["Jm"] * N + nominal["Jl"] / N) * al_ref
                     + nominal["mgl"] * np.sin(th_ref) / N) / Kt
@@ -232,7 +234,7 @@ def simulate(truth: dict, form: Form, setup: Setup, nominal: dict) -> Recording:
                 tau[k] = plant.transmitted()
                 loop[k] = plant.z_hys
                 current[k] = i_apply
-            plant.step(h, i_apply, tk + s * h)
+            plant.step(h, i_apply, tk + s * h, float(pushed[k]))
         reading = float(read_m(np.array([theta_m[k]]))[0]) - zero
         speed = 0.0 if previous is None else speed + alpha * ((reading - previous) / ts - speed)
         previous = reading

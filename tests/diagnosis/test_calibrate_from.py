@@ -12,6 +12,7 @@ import pytest
 from cli_helpers import run_cli
 from hdjoint.io import parameters
 from hdjoint.io.recording import write_recording
+from hdjoint.jobs.calibrate import chosen
 from hdjoint_truth.cases import CONTROL_CASES, draw, record
 
 
@@ -42,7 +43,7 @@ def test_a_sensorless_calibration_is_used_only_where_it_identifies(joint_files, 
     used = parameters.load(f / "calibrated.params.json")
     nominal = parameters.load(f / "nominal.json")
     rows = document["parameters"]
-    assert rows and all(r["used"] == (r["estimate"] if r["identified"] else r["nominal"]) for r in rows.values())
+    assert rows and all(r["used"] == chosen(r) for r in rows.values())
     assert any(not r["identified"] for r in rows.values())  # without a sensor some cannot be identified
     for name, r in rows.items():
         if name != "a0":
@@ -51,6 +52,16 @@ def test_a_sensorless_calibration_is_used_only_where_it_identifies(joint_files, 
     assert all(r["unit"] is not None and r["description"] for r in rows.values())
     # Never worse than the nominal set (within 10 %) on the other recording.
     assert _tau_hat_rms(f / "calibrated.csv", f / "run.csv") <= 1.1 * _tau_hat_rms(f / "nominal.csv", f / "run.csv")
+
+
+def test_an_unidentified_parameter_keeps_its_nominal_value_unless_its_interval_excludes_it():
+    # Identified: the estimate. Not identified, nominal inside the interval: the nominal value
+    # (along a direction the data cannot see). Not identified, nominal outside: the data rule the
+    # nominal value out (a link far heavier than its CAD, refitted under a released prior).
+    assert chosen({"nominal": 0.15, "estimate": 0.2, "lo": 0.19, "hi": 0.21, "identified": True}) == 0.2
+    assert chosen({"nominal": 0.15, "estimate": 0.2, "lo": 0.1, "hi": 0.3, "identified": False}) == 0.15
+    assert chosen({"nominal": 0.15, "estimate": 0.2, "lo": 0.16, "hi": 0.3, "identified": False}) == 0.2
+    assert chosen({"nominal": 0.15, "estimate": 0.2, "identified": False}) == 0.15  # no interval: nothing ruled out
 
 
 def test_a_missing_calibration_recording_is_refused_before_any_work(joint_files, capsys):

@@ -156,3 +156,30 @@ def test_cases_cover_every_effect_and_every_excitation_and_draw_differently_per_
     a, b = draw(EFFECT_CASES[0], 0), draw(EFFECT_CASES[0], 1)
     assert a.truth != b.truth and a.setups[0].excitation != a.setups[1].excitation
     assert physics.kinematic_error(a.truth, a.form, 1.0, 0.01) != physics.kinematic_error(a.truth, Form(), 1.0, 0.01)
+
+
+@pytest.mark.parametrize("integrator", ["semi_implicit", "heun"])
+def test_an_external_load_on_the_link_is_carried_by_the_joint(integrator):
+    # Payload steps: 1.2 N.m pushing the link from 5 s on; the controller holds the
+    # position, so the transmitted torque gives way by the payload (tau_f = load - tau_ext).
+    form = Form(integrator=integrator, omega_fc=1.0, substeps=5)
+    base = dict(excitation="sweep", duration=7.0, scale=0.0)
+    quiet = simulate(NOMINAL, form, Setup(**base), NOMINAL)
+    pushed = simulate(NOMINAL, form, Setup(**base, load="payload"), NOMINAL)
+    held = (quiet.time > 6.0) & (quiet.time < 7.0)
+    before = quiet.time < 5.0
+    assert np.allclose(pushed.extra["tau_joint"][before], quiet.extra["tau_joint"][before])
+    assert np.mean(pushed.extra["tau_joint"][held] - quiet.extra["tau_joint"][held]) == pytest.approx(-1.2, abs=0.05)
+    with pytest.raises(ValueError, match="external load"):
+        simulate(NOMINAL, form, Setup(**base, load="wind"), NOMINAL)
+
+
+def test_parameter_errors_are_drawn_within_the_bounds_given_and_leave_the_rest_as_drawn():
+    case = CONTROL_CASES[0]
+    default, exact_kt = draw(case, 3), draw(case, 3, errors={"Kt": 0.0, "Kf": 0.2})
+    assert exact_kt.truth["Kt"] == exact_kt.nominal["Kt"]
+    assert {k: v for k, v in exact_kt.truth.items() if k not in ("Kt", "Kf")} == \
+        {k: v for k, v in default.truth.items() if k not in ("Kt", "Kf")}
+    # The same draw, scaled to the wider bound.
+    assert exact_kt.truth["Kf"] / exact_kt.nominal["Kf"] - 1 == pytest.approx(
+        2 * (default.truth["Kf"] / default.nominal["Kf"] - 1))

@@ -35,6 +35,7 @@ class PaperTable:
     estimates: dict  # name -> torque array
     tau_hat: ErrorFigures | None = None     # the joint-state filter (beyond the paper), same settings
     tau_smooth: ErrorFigures | None = None  # its RTS smoother
+    tau_hat_calibrated: ErrorFigures | None = None  # tau_hat with a set calibrated without a torque sensor
 
     def rows(self):
         yield "paper: compliance model", PAPER_COMPLIANCE, None
@@ -43,7 +44,8 @@ class PaperTable:
         yield "hdjoint: UKF, default settings", self.ukf_default, self.ukf_default.reduction_against(self.compliance)
         yield "hdjoint: UKF, tuned on this run", self.ukf_tuned, self.ukf_tuned.reduction_against(self.compliance)
         for name, fig in (("hdjoint: tau_hat (joint-state filter)", self.tau_hat),
-                          ("hdjoint: tau_smooth (its smoother, offline)", self.tau_smooth)):
+                          ("hdjoint: tau_smooth (its smoother, offline)", self.tau_smooth),
+                          ("hdjoint: tau_hat after a sensorless calibration", self.tau_hat_calibrated)):
             if fig is not None:
                 yield name, fig, fig.reduction_against(self.compliance)
 
@@ -61,9 +63,12 @@ def _ukf(params, rec, smooth=False):
                                smooth=smooth)
 
 
-def reproduce(rec: Recording, params: dict[str, float] | None = None, reference=None) -> PaperTable:
+def reproduce(rec: Recording, params: dict[str, float] | None = None, reference=None,
+              calibrated: dict[str, float] | None = None) -> PaperTable:
     """Compare the estimators on a recording against `reference` (default: the
-    recording's true torque column `tau_joint`, else `tau_sensor`)."""
+    recording's true torque column `tau_joint`, else `tau_sensor`); with
+    `calibrated` (a set calibrated from other recordings without a torque
+    sensor, e.g. jobs.paper_calibration), tau_hat with it too."""
     params = dict(params or parameters.defaults())
     if reference is None:
         reference = rec.extra.get("tau_joint", rec.tau_sensor)
@@ -82,5 +87,6 @@ def reproduce(rec: Recording, params: dict[str, float] | None = None, reference=
         ukf_default=error_figures(base["tau_ukf"], reference),
         ukf_tuned=best[0], tuned_settings=best[1],
         tau_hat=error_figures(base["tau_hat"], reference), tau_smooth=error_figures(base["tau_smooth"], reference),
+        tau_hat_calibrated=None if calibrated is None else error_figures(_ukf(calibrated, rec)["tau_hat"], reference),
         estimates={"reference": np.asarray(reference), "tau_compliance": base["tau_compliance"],
                    "tau_ukf (default)": base["tau_ukf"], "tau_ukf (tuned)": best[2]})
