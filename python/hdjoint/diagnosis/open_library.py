@@ -18,7 +18,6 @@ to read, not a finding: it changes no verdict and no parameter."""
 from __future__ import annotations
 
 import numpy as np
-from sklearn.linear_model import orthogonal_mp_gram
 
 from hdjoint.diagnosis.rules import EVIDENCE_Z, PROPOSAL_MIN_GAIN
 from hdjoint.diagnosis.structure import held_out_gain_sq
@@ -89,6 +88,8 @@ def propose(rec, kin, residual: np.ndarray, torque: np.ndarray, fold: np.ndarray
     offset = y_train.mean()
     before = (y_test - offset) ** 2
     # The whole pursuit path at once (1..MAX_TERMS terms) from the training Gram matrix.
+    # scikit-learn is imported here: it costs 0.4 s, and most diagnoses never propose a term.
+    from sklearn.linear_model import orthogonal_mp_gram
     X_train, X_test = X[: len(tr)], X[len(tr):]
     path = orthogonal_mp_gram(X_train.T @ X_train, X_train.T @ (y_train - offset), n_nonzero_coefs=MAX_TERMS,
                               return_path=True)

@@ -12,6 +12,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from hdjoint.diagnosis import plots as dp
+from hdjoint.diagnosis.forked import map_forked
 from hdjoint.diagnosis.rules import (
     EVIDENCE_Z,
     FALSE_DISCOVERY_RATE,
@@ -61,6 +62,26 @@ def _figure(draw, size=(9, 3.2)) -> str:
     fig, ax = plt.subplots(figsize=size, constrained_layout=True)
     draw(ax)
     return to_data_uri(fig)
+
+
+class _Figures:
+    """The page's figures, drawn together at the end in forked processes
+    (forked.py): matplotlib's layout and PNG encoding take most of the
+    report's time, and each figure is independent of the others."""
+
+    def __init__(self):
+        self.jobs: list[tuple] = []
+
+    def add(self, draw, size=(9, 3.2)) -> str:
+        """A placeholder for the figure `draw` makes, filled in by fill()."""
+        self.jobs.append((draw, size))
+        return f"\x00figure {len(self.jobs) - 1}\x00"
+
+    def fill(self, page: str) -> str:
+        uris = map_forked(lambda i: _figure(*self.jobs[i]), len(self.jobs))
+        for i, uri in enumerate(uris):
+            page = page.replace(f"\x00figure {i}\x00", uri)
+        return page
 
 
 def _img(uri: str, alt: str) -> str:
@@ -250,21 +271,22 @@ def build(result, doc: dict) -> str:
     rec, kin = diag.rec, diag.prep.kin
     p0, p1 = result.calibrated_params, doc["params"]
     sections = []
+    drawn = _Figures()
 
     # Where: every channel's residual over time, before and after, segments marked.
     segs = [s for f in doc["findings"] for s in f["where"]["time_segments"]]
     figs = []
     for c in diag.channels:
         before, after = diag.shown_residual(c, p0), diag.shown_residual(c, p1)
-        figs.append(_img(_figure(lambda ax, b=before, a=after, name=c.name: dp.residual_over_time(
+        figs.append(_img(drawn.add(lambda ax, b=before, a=after, name=c.name: dp.residual_over_time(
             ax, rec.time, b, a, segs, f"{name} residual")),
                          f"Residual of the {c.name} channel over time (located segments shaded)"))
-        figs.append(_img(_figure(lambda ax, b=before, a=after: dp.residual_vs_feature(
+        figs.append(_img(drawn.add(lambda ax, b=before, a=after: dp.residual_vs_feature(
             ax, kin.omega_m, b, a, "motor speed (rad/s)"), (6, 3)),
                          f"{c.name}: mean residual vs motor speed (regime)"))
         orders = candidate_orders("theta_m", np.ptp(rec.theta_m))
         if orders:
-            figs.append(_img(_figure(lambda ax, b=before, a=after, k=orders: dp.order_spectrum(
+            figs.append(_img(drawn.add(lambda ax, b=before, a=after, k=orders: dp.order_spectrum(
                 ax, rec.theta_m, b, a, k, "theta_m"), (6, 3)),
                              f"{c.name}: order spectrum of the residual over the motor angle"))
     sections.append("<h2>Where the model and the recording differ</h2>" + "".join(figs))
@@ -277,7 +299,7 @@ def build(result, doc: dict) -> str:
         est = _core.compliance(parameters.for_estimator(p1), rec.i_m, rec.theta_m, rec.theta_l)
         reference = diag.reference_torque(p1)
         sections.append("<h2>Torque against torsion</h2>" + _img(
-            _figure(lambda ax: dp.torque_torsion_loop(ax, est["dtheta_f"], reference, est["tau_compliance"]),
+            drawn.add(lambda ax: dp.torque_torsion_loop(ax, est["dtheta_f"], reference, est["tau_compliance"]),
                     (6, 4)), "Reference torque vs flexspline torsion: loops mean hysteresis, flats backlash"))
 
     # Findings.
@@ -315,7 +337,7 @@ def build(result, doc: dict) -> str:
     labels = [c.name for c in diag.channels]
     rb = [float(np.sqrt(np.nanmean(diag.shown_residual(c, p0)[diag.test] ** 2))) for c in diag.channels]
     ra = [float(np.sqrt(np.nanmean(diag.shown_residual(c, p1)[diag.test] ** 2))) for c in diag.channels]
-    fit_html = _img(_figure(lambda ax: dp.rms_bars(ax, labels, rb, ra, "held-out RMS residual (N.m)"), (6, 3)),
+    fit_html = _img(drawn.add(lambda ax: dp.rms_bars(ax, labels, rb, ra, "held-out RMS residual (N.m)"), (6, 3)),
                     "Held-out residual RMS per channel: calibrated nominal vs corrected model")
     if doc.get("estimator"):
         e = doc["estimator"]
@@ -351,7 +373,7 @@ def build(result, doc: dict) -> str:
             [(n["effect"], n["reason"]) for n in doc["not_testable"]], ["effect", "why"]))
 
     title = f"hdjoint diagnosis: {doc['verdict']}"
-    return ("<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>" + html.escape(title) +
+    return drawn.fill("<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>" + html.escape(title) +
             "</title><style>body{font-family:sans-serif;max-width:70em;margin:1.5em auto;color:#222}"
             "table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:.2em .5em}"
             "img{max-width:100%}figure{margin:.5em 0}figcaption{font-size:.85em;color:#555}"
