@@ -18,8 +18,8 @@ from hdjoint.diagnosis.effects import EFFECTS, Effect, owner
 from hdjoint.diagnosis.hypotheses import Finding
 from hdjoint.diagnosis.objective import Objective
 from hdjoint.diagnosis.prepare import unresolved_harmonics
-from hdjoint.diagnosis.rules import (EVIDENCE_Z, FALSE_DISCOVERY_RATE, GROSS_CHECKED, GROSS_FACTOR, HYPOTHESIS_FTOL,
-                                     MIN_GAIN, RESIZE_Z)
+from hdjoint.diagnosis.rules import (EVIDENCE_Z, FALSE_DISCOVERY_RATE, GROSS_CHECKED, GROSS_FACTOR, GROSS_RATIO,
+                                     HYPOTHESIS_FTOL, INTERVAL, MIN_GAIN, RESIZE_Z)
 from hdjoint.diagnosis.select import Selection
 from hdjoint.diagnosis.structure import held_out_gain_sq
 from hdjoint.io import parameters
@@ -109,7 +109,9 @@ def released(objective: Objective, selection: Selection, calibration: dict[str, 
     times its nominal value either way, (or already did in the
     calibration, where the prior may have held it short) is tested as `resized` tests:
     held at the edge of its tolerance, the rest refitted, the model must
-    predict held-out data worse (compared at the noise as measured). A
+    predict held-out data worse (compared at the noise as measured). One
+    within RESIZE_Z tolerances but off by GROSS_RATIO either way is needed
+    when its released interval excludes that factor. A
     needed one is a resized finding of its owner with the released
     estimate and interval, or, owned by none, unexplained structure with
     its size in N.m; the corrected set takes the released estimate. It runs
@@ -130,41 +132,61 @@ def released(objective: Objective, selection: Selection, calibration: dict[str, 
     for n in names:
         c = calibration[n]
         moved = abs(jointly.params[n] - c.prior.centre) > RESIZE_Z * c.prior.std
-        if c.beyond_tolerance or moved:
+        if c.beyond_tolerance or moved or _ratio_edge(jointly.params[n], c.prior.centre) is not None:
             candidates.append(n)
     findings, unexplained = [], []
     for n in candidates:
         prior = objective.priors[n]
         unheld = objective.with_priors({n: wide[n]}).fit(dict(p, **{n: jointly.params[n]}), free, objective.channels,
                                                           ftol=HYPOTHESIS_FTOL)
-        estimate = unheld.params[n]
-        if abs(estimate - prior.centre) <= RESIZE_Z * prior.std:
+        estimate, std = unheld.params[n], unheld.std.get(n, prior.std)
+        beyond_tolerance = abs(estimate - prior.centre) > RESIZE_Z * prior.std
+        ratio_edge = _ratio_edge(estimate, prior.centre)
+        if not beyond_tolerance and ratio_edge is None:
             continue
         if not _within_factor(estimate, prior.centre):
             objective.say(f"{n}: released to {estimate:.4g} (nominal {prior.centre:.4g}), beyond {GROSS_FACTOR:g} "
                           "times either way: another part, not this one mis-sized (degenerate)")
             continue
-        edge = prior.centre + math.copysign(RESIZE_Z * prior.std, estimate - prior.centre)
+        edge = (prior.centre + math.copysign(RESIZE_Z * prior.std, estimate - prior.centre) if beyond_tolerance
+                else ratio_edge)
         held = objective.fit(dict(p, **{n: edge}), [m for m in free if m != n], objective.channels, ftol=HYPOTHESIS_FTOL)
         gain = held_out_gain_sq(objective.at_measured_noise(held.params), objective.at_measured_noise(unheld.params),
                                 objective.fold, objective.test)
-        p_value = float(norm.sf(gain.z))
-        objective.say(f"{n}: released to {estimate:.4g} (nominal {prior.centre:.4g}); held to its tolerance, "
-                      f"held-out gain {100 * gain.gain:.2f} % (z = {gain.z:.1f})")
-        if not (gain.gain > MIN_GAIN and p_value <= FALSE_DISCOVERY_RATE / len(candidates) and gain.z > EVIDENCE_Z):
+        level = FALSE_DISCOVERY_RATE / len(candidates)
+        if beyond_tolerance:
+            p_value = float(norm.sf(gain.z))
+            needed = gain.gain > MIN_GAIN and p_value <= level and gain.z > EVIDENCE_Z
+        else:  # within tolerances but off by a factor: its released interval must exclude that factor
+            p_value = float(norm.sf(abs(estimate - edge) / max(std, 1e-300)))
+            needed = p_value <= level and abs(estimate - edge) > norm.ppf(0.5 + INTERVAL / 2) * std
+        objective.say(f"{n}: released to {estimate:.4g} (nominal {prior.centre:.4g}); held at {edge:.4g}, "
+                      f"held-out gain {100 * gain.gain:.2f} % (z = {gain.z:.1f}), p = {p_value:.2g}")
+        if not needed:
             continue
         moved = Calibrated(n, objective.nominal.get(n, prior.centre), estimate,
                            unheld.std.get(n, prior.std), prior)
         effect = owner(n)
         if effect is not None:
             findings.append(_resize_or_lookalike(selection, Finding(
-                effect, "resized", held.params, unheld.params, [n], p_value, round(float(norm.cdf(gain.z - 2.0)), 3),
-                resized=[moved], resize_gain=gain)))
+                effect, "resized", held.params, unheld.params, [n], p_value,
+                round(float(norm.cdf(norm.isf(max(p_value, 1e-300)) - 2.0)), 3), resized=[moved], resize_gain=gain)))
         else:
             unexplained += _constant_off(objective, moved, p, unheld.params, gain, p_value)
         p = unheld.params
         selection = replace(selection, params=p, last_fit=unheld)
     return Released(findings, unexplained, selection)
+
+
+def _ratio_edge(estimate: float, nominal: float) -> float | None:
+    """GROSS_RATIO times (or over) the nominal value on the estimate's side,
+    when the estimate lies beyond it with the same sign; else None."""
+    if nominal == 0.0 or estimate / nominal <= 0.0:
+        return None
+    ratio = abs(estimate / nominal)
+    if ratio > GROSS_RATIO:
+        return nominal * GROSS_RATIO
+    return nominal / GROSS_RATIO if ratio < 1.0 / GROSS_RATIO else None
 
 
 def _within_factor(estimate: float, nominal: float) -> bool:

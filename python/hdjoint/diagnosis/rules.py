@@ -90,6 +90,11 @@ STANDSTILL_SAMPLES = 50
 # value either way is another part, not a mis-sized one.
 GROSS_CHECKED = ("mgl", "Jl", "Kf")
 GROSS_FACTOR = 25.0
+# One of them whose released INTERVAL lies wholly beyond this factor of its
+# nominal value either way is resized even within RESIZE_Z tolerances: a
+# flexspline 2.5 times softer sits 3 tolerances of 20 % off, not beyond, and
+# the rest of the calibration takes up much of it when it is held there.
+GROSS_RATIO = 2.0
 RESIZE_Z = 3.0          # |estimate - nominal| / tolerance beyond which a parameter counts as resized
 IDENTIFIED_RATIO = 0.5  # posterior std / prior std below which the recording identifies a parameter
 INTERVAL = 0.95         # every fitted parameter's interval
