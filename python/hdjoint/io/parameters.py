@@ -251,7 +251,7 @@ def check_sensor_noise(stated, source: str = "parameter set") -> dict[str, float
 def load(path: str | os.PathLike | None) -> dict[str, float]:
     """Defaults overridden by a JSON parameter file (None: defaults only).
     Its optional "tolerance", "accuracy" and "sensor_noise" entries are
-    checked here and read by load_tolerances and load_measurement."""
+    checked here and read by load_statements."""
     params = defaults()
     if path is None:
         return params
@@ -263,20 +263,19 @@ def load(path: str | os.PathLike | None) -> dict[str, float]:
     return params
 
 
-def load_measurement(path: str | os.PathLike | None) -> tuple[float | None, dict[str, float]]:
-    """The stated accuracy (N.m, or None) and sensor noise ({} when none) of a parameter file."""
-    if path is None:
-        return None, {}
-    data = _read_json(path)
-    return (check_accuracy(data.get(ACCURACY_KEY), str(path)),
-            check_sensor_noise(data.get(SENSOR_NOISE_KEY, {}), str(path)))
+def load_statements(path: str | os.PathLike | None) -> dict:
+    """What a parameter file states beside its parameters, checked, as the
+    diagnosis takes it: "tolerance" (relative, per parameter), "accuracy"
+    (N.m, or None) and the sensors' "noise" ({} when none is stated)."""
+    data = {} if path is None else _read_json(path)
+    return {"tolerance": check_tolerances(data.get(TOLERANCE_KEY, {}), str(path)),
+            "accuracy": check_accuracy(data.get(ACCURACY_KEY), str(path)),
+            "noise": check_sensor_noise(data.get(SENSOR_NOISE_KEY, {}), str(path))}
 
 
 def load_tolerances(path: str | os.PathLike | None) -> dict[str, float]:
     """The user's relative tolerances from a parameter file ({} when it states none)."""
-    if path is None:
-        return {}
-    return check_tolerances(_read_json(path).get(TOLERANCE_KEY, {}), str(path))
+    return load_statements(path)["tolerance"]
 
 
 def _atomic_write(path: str | os.PathLike, text: str) -> None:

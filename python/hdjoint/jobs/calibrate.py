@@ -70,10 +70,8 @@ def calibrate_from(paths: list[str], params_path: str | None, time_unit: str | N
     recs, _ = screened_recordings([read_recording(path, time_unit, current_sign) for path in paths])
     nominal = read_params(params_path)
     try:
-        tolerance = parameters.load_tolerances(params_path)
-        accuracy, noise = parameters.load_measurement(params_path)
-        _, doc = diagnose(recs if len(recs) > 1 else recs[0], nominal, progress=_progress, tolerance=tolerance,
-                          accuracy=accuracy, noise=noise)
+        statements = parameters.load_statements(params_path)
+        _, doc = diagnose(recs if len(recs) > 1 else recs[0], nominal, progress=_progress, **statements)
     except (parameters.ParameterError, DiagnosisError) as e:
         raise UserError(str(e)) from None
     params = dict(doc["params"])

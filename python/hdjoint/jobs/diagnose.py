@@ -46,13 +46,11 @@ def _diagnose_locked(paths, params, out, validate, time_unit, current_sign) -> d
     others, screened_others = screened_recordings(others)
     nominal = read_params(params)
     try:
-        tolerance = parameters.load_tolerances(params)
-        accuracy, noise = parameters.load_measurement(params)
+        statements = parameters.load_statements(params)
     except parameters.ParameterError as e:
         raise UserError(str(e)) from None
     try:
-        result, doc = diagnose(recs if len(recs) > 1 else recs[0], nominal, progress=_progress, tolerance=tolerance,
-                               accuracy=accuracy, noise=noise)
+        result, doc = diagnose(recs if len(recs) > 1 else recs[0], nominal, progress=_progress, **statements)
         if others:
             _progress("checking the corrected model on the other recordings")
             doc["validation"] = [validate_on(o, result.nominal, result.calibrated_params, doc["params"],

@@ -3,8 +3,6 @@ friction (lubricant). Both forms in one fit; which one carries the drift is
 read from their fitted sizes and intervals."""
 from __future__ import annotations
 
-import math
-
 from hdjoint.diagnosis.effects.base import Effect, RecordingScale, Size, TruthDraw
 
 # The fastest a motor's temperature moves is its winding's thermal time
@@ -38,8 +36,6 @@ class ThermalDrift(Effect):
         if 1.0 + drift * scale.duration <= 0.0:
             return (f"the fitted friction drift ({drift:.2g} /s) drives friction through zero within the "
                     f"{scale.duration:.3g} s recording: not a warm-up")
-        if not math.isfinite(tc):
-            return "the fitted warm-up's time constant is not finite"
         return None
 
     def plant_in_truth(self, draw: TruthDraw) -> None:
