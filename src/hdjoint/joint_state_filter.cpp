@@ -281,20 +281,23 @@ FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointI
     previous_ = finite(in) ? in : accepted_;
     record_.input = previous_;
 
-    const JointTorque T = system_.torque(kalman_.state(), previous_);
-    if (T.valid) {
-        out_.tau = T.tau;
-        out_.tau_std = std::sqrt(std::max(torque_variance(T, kalman_.covariance()), 0.0));
-    } else {
-        // No torque explains this state: keep the last one, and say so.
-        status = std::max(status, FilterStatus::SampleRejected);
-    }
-    out_.load = kalman_.state()(kLoad);
+    // No torque explains this state: the last one is kept, and said so.
+    if (!publish_state()) status = std::max(status, FilterStatus::SampleRejected);
     out_.nis = update.nis;
     if (adapt_weight_ > 0.0 && update.status == FilterStatus::Ok)
         load_noise_scale_ += adapt_weight_ * (0.5 * update.nis - load_noise_scale_);
     if (!finite(in)) status = std::max(status, FilterStatus::SampleRejected);
     return std::max(status, update.status);
+}
+
+bool JointStateFilter::publish_state() {
+    const JointTorque T = system_.torque(kalman_.state(), previous_);
+    if (T.valid) {
+        out_.tau = T.tau;
+        out_.tau_std = std::sqrt(std::max(torque_variance(T, kalman_.covariance()), 0.0));
+    }
+    out_.load = kalman_.state()(joint_state::kLoad);
+    return T.valid;
 }
 
 void JointStateFilter::predict_without_reading(const JointInput& in) {
@@ -316,12 +319,7 @@ void JointStateFilter::predict_without_reading(const JointInput& in) {
     record_.P = kalman_.covariance();
     previous_ = finite(in) ? in : accepted_;
     record_.input = previous_;
-    const JointTorque T = system_.torque(kalman_.state(), previous_);
-    if (T.valid) {
-        out_.tau = T.tau;
-        out_.tau_std = std::sqrt(std::max(torque_variance(T, kalman_.covariance()), 0.0));
-    }
-    out_.load = kalman_.state()(kLoad);
+    publish_state();
     out_.nis = 0.0;  // no innovation
 }
 

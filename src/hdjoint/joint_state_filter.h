@@ -213,6 +213,10 @@ public:
     bool load(const std::vector<double>& in, std::size_t* cursor);
 
 private:
+    // Torque, its std and the load from the current state and inputs; false
+    // (the last torque kept) when no torque explains the state.
+    bool publish_state();
+
     Parameters p_;
     JointSystemModel system_;
     JointMeasurementModel measurement_;
