@@ -6,17 +6,23 @@ children inherit the prepared recording and its caches without copying or
 pickling them; only each piece's result comes back. Where forking is not
 safe (a daemonic process such as a Dask worker, which may not have
 children, or a process running other threads, whose locks a child could
-inherit held) the pieces run one after the other, with the same results."""
+inherit held) the pieces run one after the other, with the same results.
+
+A fit's finite-difference Jacobian is such a computation too: one residual
+evaluation per parameter (forked_map lends a least-squares solver a
+map-like over forked children)."""
 from __future__ import annotations
 
 import multiprocessing
 import os
 import signal
 import threading
-from typing import Callable, TypeVar
+from contextlib import contextmanager
+from typing import Callable, Iterator, TypeVar
 
 T = TypeVar("T")
 _piece: Callable[[int], object] | None = None  # what the forked children run, inherited
+_function: Callable | None = None  # what forked_map's children evaluate, inherited
 
 
 def available_cores() -> int:
@@ -54,3 +60,30 @@ def map_forked(piece: Callable[[int], T], count: int, workers: int | None = None
             return pool.map(_run, range(count), chunksize=1)
     finally:
         _piece = None
+
+
+class Inherited:
+    """Stands for the function forked_map's children inherited: it pickles
+    as nothing, so a solver can hand it to the map with each argument."""
+
+    def __call__(self, *args):
+        return _function(*args)
+
+
+@contextmanager
+def forked_map(function: Callable, workers: int | None = None) -> Iterator[tuple[Callable, Callable | None]]:
+    """(f, map): f evaluates `function` and pickles, map(f, arguments) is a
+    map-like over up to `workers` forked children that inherited `function`
+    (None: one per available core). Where forking is not safe, or already
+    lent (one at a time), f is `function` and map is None: one after the other."""
+    global _function
+    workers = available_cores() if workers is None else workers
+    if workers <= 1 or not can_fork() or _function is not None:
+        yield function, None
+        return
+    _function = function
+    try:
+        with multiprocessing.get_context("fork").Pool(workers, initializer=_quiet_on_ctrl_c) as pool:
+            yield Inherited(), lambda f, arguments: pool.map(f, arguments, chunksize=1)
+    finally:
+        _function = None

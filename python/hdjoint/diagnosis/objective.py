@@ -15,6 +15,7 @@ from hdjoint.diagnosis.calibration import Prior, posterior_std, robust_std, wide
 from hdjoint.diagnosis.channels import Channel
 from hdjoint.diagnosis.effects import ALWAYS_CALIBRATED, calibrated_parameters, orthogonal_parameters
 from hdjoint.diagnosis.effects.base import RecordingScale
+from hdjoint.diagnosis.forked import forked_map
 from hdjoint.diagnosis.hypotheses import Fit
 from hdjoint.diagnosis.part_torques import sharp_transmission, tau_transmission
 from hdjoint.diagnosis.prepare import Setup, place_offset
@@ -212,8 +213,10 @@ class Objective:
 
         try:
             # max_nfev counts steps (scipy does not count the finite-difference Jacobian's calls).
-            sol = least_squares(residuals, x0 / scale, bounds=(lo / scale, hi / scale), method="trf",
-                                x_scale="jac", max_nfev=max_nfev, diff_step=1e-6, ftol=ftol)
+            # The Jacobian's columns side by side where this fit is not itself one of several.
+            with forked_map(residuals, self.workers if len(names) > 1 else 1) as (function, columns):
+                sol = least_squares(function, x0 / scale, bounds=(lo / scale, hi / scale), method="trf",
+                                    x_scale="jac", max_nfev=max_nfev, diff_step=1e-6, ftol=ftol, workers=columns)
         except ValueError:
             return Fit(dict(x0_params), list(names), float("inf"))
         fitted = dict(x0_params)
