@@ -79,3 +79,55 @@ def test_a_daemonic_process_runs_its_pieces_itself():
     can, out = queue.get(timeout=60)
     child.join()
     assert can is False and out == [1, 2, 3]
+
+
+def _lent_jacobian():
+    """A least-squares fit whose residual function closes over unpicklable
+    state, with its Jacobian's columns by forked children and one after the
+    other: for each, (solution, Jacobian, the other processes that evaluated it)."""
+    import numpy as np
+    from scipy.optimize import least_squares
+    state = {"lock": threading.Lock(), "t": np.linspace(0.0, 1.0, 200)}
+    evaluated_by = multiprocessing.get_context("fork").SimpleQueue()
+
+    def residuals(z):
+        evaluated_by.put(os.getpid())
+        t = state["t"]
+        return z[0] * np.exp(-z[1] * t) + z[2] * t - (2.0 * np.exp(-3.0 * t) + 0.5 * t)
+
+    solutions = []
+    for workers in (2, 1):
+        with forked.forked_map(residuals, workers) as (function, columns):
+            sol = least_squares(function, [1.0, 1.0, 0.0], diff_step=1e-6, x_scale="jac", workers=columns)
+        pids = set()
+        while not evaluated_by.empty():
+            pids.add(evaluated_by.get())
+        solutions.append((sol.x.tolist(), sol.jac.tolist(), sorted(pids - {os.getpid()})))
+    return solutions
+
+
+def test_a_fits_jacobian_by_forked_children_is_the_one_after_the_other():
+    status, _, out = _in_single_threaded_process(_lent_jacobian)
+    assert status == "ok"
+    (x_side, jac_side, children), (x_serial, jac_serial, none) = out
+    assert len(children) == 2 and not none
+    assert x_side == x_serial and jac_side == jac_serial  # bit for bit
+
+
+def test_no_lending_while_lent_nor_where_forking_is_unsafe():
+    stop = threading.Event()
+    other = threading.Thread(target=stop.wait)
+    other.start()
+    try:
+        with forked.forked_map(abs, 2) as (function, columns):
+            assert function is abs and columns is None
+    finally:
+        stop.set()
+        other.join()
+
+    def nested():
+        with forked.forked_map(abs, 2) as (_, outer):
+            with forked.forked_map(abs, 2) as (inner_function, inner):
+                return outer is not None, inner is None and inner_function is abs
+    status, _, out = _in_single_threaded_process(nested)
+    assert status == "ok" and out == (True, True)
