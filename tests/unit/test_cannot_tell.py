@@ -63,7 +63,7 @@ def test_an_effect_hidden_at_its_sourced_reference_size_is_said_with_its_limit()
     unsourced = _limit("time_delay", "i_delay", 0.001, 0.002, 2.0, source="")
     said = cannot_tell(_result([], limits=[hidden, shown, never, unsourced]))
     assert [x["effect"] for x in said] == ["wave_generator_compliance", "stiffness_nonlinearity"]
-    assert "Kw = 5 N.m/rad (2 times the size at Kw = 10, a catalogue)" in said[0]["why"]
+    assert "from a wave generator stiffness Kw of 5 N.m/rad (2 times the reference, 10 N.m/rad, a catalogue)" in said[0]["why"]
     assert "not show at any size up to 1024 times" in said[1]["why"]
     assert all(x["record"] for x in said)
 

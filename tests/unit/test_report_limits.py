@@ -10,8 +10,9 @@ def test_limits_read_with_units_and_a_missing_limit_in_words():
          "times_reference": 3.4},
         {"effect": "wave_generator_compliance", "parameter": "Kw", "unit": "N.m/rad", "reference": 10.0,
          "limit": None, "times_reference": None, "reference_source": "the table's joint"}])
-    assert "<td>Kt_warmup = -0.1 (3.4 times the reference)</td>" in page
-    assert "Kw = 10 N.m/rad (the table&#x27;s joint)" in page
+    assert "<td>-0.1 (3.4 times the reference)</td>" in page
+    assert "<td>a torque-constant warm-up Kt_warmup of -0.03</td>" in page
+    assert "a wave generator stiffness Kw of 10 N.m/rad (the table&#x27;s joint)" in page
     assert "none up to 1024 times that" in page
     assert "{" not in page and "None" not in page
 
@@ -22,9 +23,13 @@ def test_a_ripple_limit_names_its_order_in_the_table_and_in_words():
                   at=("theta_l", 2.0))
     doc = limit.as_dict()
     assert doc["orders"] == [["theta_l", 2.0]]
-    assert "at theta_l order 2, it shows only from a size of ke_l1_a = 0.000345 rad" in limit.sentence()
+    # The slot it was planted in (ke_l1_a) means nothing to a person: its role is said instead.
+    assert limit.sentence().startswith("at theta_l order 2, it shows only from a cosine amplitude of 0.000345 rad "
+                                       "(2.4 times the reference, 0.000145 rad, 1 arcmin (catalogue))")
     page = _limits_section([doc])
-    assert "<td>kinematic_error at theta_l order 2</td>" in page and "ke_l1_a = 0.000345 rad" in page
+    assert "<td>kinematic_error at theta_l order 2</td>" in page and "<td>0.000345 rad (2.38 times" in page
+    assert "a cosine amplitude of 0.000145 rad" in page
+    assert "ke_l1_a" not in limit.sentence() + page
 
 
 def test_a_limit_names_the_shape_it_was_planted_with():
@@ -37,8 +42,9 @@ def test_a_limit_names_the_shape_it_was_planted_with():
     assert shape == (("omega_s", defaults()["omega_s"]),)
     limit = Limit("stribeck_friction", "Fs", 0.01, 0.002, 0.2, 1.0, "", shape=shape)
     assert limit.as_dict()["with"] == {"omega_s": 20.0}
-    assert limit.sentence().startswith("with omega_s = 20 rad/s, it shows only from a size of Fs = 0.002 N.m")
-    assert "<td>stribeck_friction with omega_s = 20 rad/s</td>" in _limits_section([limit.as_dict()])
+    assert limit.sentence().startswith("with Stribeck speed omega_s = 20 rad/s, it shows only from a Stribeck "
+                                       "friction Fs of 0.002 N.m")
+    assert "<td>stribeck_friction with Stribeck speed omega_s = 20 rad/s</td>" in _limits_section([limit.as_dict()])
     # Terms switched off at the reference are no part of its shape (thermal drift's Fc_drift).
     thermal = planted_shape(EFFECTS["thermal_drift"], reference_set(EFFECTS["thermal_drift"], defaults()))
     assert thermal == (("Kt_warmup_tc", 10.0),)

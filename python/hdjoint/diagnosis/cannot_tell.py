@@ -23,6 +23,7 @@ from __future__ import annotations
 
 from hdjoint.diagnosis.effects import EFFECTS, owner
 from hdjoint.diagnosis.rules import ABSORBED_Z, SEEN_BIC, SEEN_GAIN
+from hdjoint.io.parameters import meaning
 
 
 
@@ -60,7 +61,7 @@ def absorbed_constants(calibration: dict) -> list[dict]:
         if owner(name) is not None or abs(c.z) <= ABSORBED_Z or not c.nominal:
             continue
         out.append({"parameter": name,
-                    "why": f"calibration moved {name} to {c.estimate / c.nominal:.2f}x its nominal value "
+                    "why": f"calibration moved the {meaning(name)} {name} to {c.estimate / c.nominal:.2f}x its nominal value "
                            f"(z = {c.z:.1f} tolerances): it takes up what this recording cannot name",
                     "record": "another excitation (see the effects' `revealed_by`), or check the nominal value"})
     return out

@@ -94,14 +94,24 @@ class Limit:
 
     def sentence(self) -> str:
         where = f"at {self.at[0]} order {self.at[1]:g}, " if self.at else ""
-        where += f"with {parameters.values_in_text(dict(self.shape))}, " if self.shape else ""
+        where += f"with {parameters.values_in_text(dict(self.shape), described=True)}, " if self.shape else ""
+        size = size_in_words(self.parameter, bool(self.at))
+        unit = parameters.unit_in_text(parameters.table()[self.parameter].unit)
+        reference = f"{self.reference:.3g}{unit}{', ' + self.sourced if self.sourced else ''}"
         if self.limit is None:
             return (f"{where}it would not show at any size up to {LARGEST:g} times the reference "
-                    f"({self.parameter} = {self.reference:.3g}) within the parameter's valid range")
-        unit = parameters.unit_in_text(parameters.table()[self.parameter].unit)
-        return (f"{where}it shows only from a size of {self.parameter} = {self.limit:.3g}{unit} ({self.factor:.2g} "
-                f"times the size at {self.parameter} = {self.reference:.3g}"
-                f"{', ' + self.sourced if self.sourced else ''})")
+                    f"({size} of {reference}) within the parameter's valid range")
+        return (f"{where}it shows only from {size} of {self.limit:.3g}{unit} ({self.factor:.2g} "
+                f"times the reference, {reference})")
+
+
+def size_in_words(parameter: str, in_a_slot: bool) -> str:
+    """What an effect's size is, for a person: 'a Stribeck friction Fs'. An
+    effect at an angle order is planted in a slot whose symbol (ke_l1_a)
+    means nothing outside the model: its role says it ('a cosine amplitude')."""
+    if in_a_slot:
+        return "a " + parameters.table()[parameter].description.split(": ", 1)[-1].split(" (")[0]
+    return f"a {parameters.meaning(parameter)} {parameter}"
 
 
 def planted_shape(effect: Effect, reference: dict) -> tuple[tuple[str, float], ...]:

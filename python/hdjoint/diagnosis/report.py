@@ -12,6 +12,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from hdjoint.diagnosis import plots as dp
+from hdjoint.diagnosis.detection_limit import size_in_words
 from hdjoint.diagnosis.forked import map_forked
 from hdjoint.diagnosis.rules import (
     EVIDENCE_Z,
@@ -241,12 +242,11 @@ def _validation_section(entries: list[dict]) -> str:
 def _limits_section(limits: list[dict]) -> str:
     """The smallest size of each effect tested and not found that this recording would have shown."""
     rows = [(x["effect"] + "".join(f" at {angle} order {_fmt(order)}" for angle, order in x.get("orders", []))
-             + (f" with {values_in_text(x['with'])}" if x.get("with") else ""),
-             f"{x['parameter']} = {_fmt(x['reference'])}{unit_in_text(x['unit'])}"
-             + (f" ({x['reference_source']})" if x.get("reference_source") else ""),
+             + (f" with {values_in_text(x['with'], described=True)}" if x.get("with") else ""),
+             f"{size_in_words(x['parameter'], bool(x.get('orders')))} of {_fmt(x['reference'])}"
+             f"{unit_in_text(x['unit'])}" + (f" ({x['reference_source']})" if x.get("reference_source") else ""),
              "none up to 1024 times that (or the parameter's valid range)" if x["limit"] is None else
-             f"{x['parameter']} = {_fmt(x['limit'])}{unit_in_text(x['unit'])} "
-             f"({_fmt(x['times_reference'])} times the reference)")
+             f"{_fmt(x['limit'])}{unit_in_text(x['unit'])} ({_fmt(x['times_reference'])} times the reference)")
             for x in limits]
     return ("<h2>How large an effect this recording would show</h2><p>Each effect tested and not found, planted "
             "into the corrected model at sizes around a reference; what calibration would take of it removed, the "

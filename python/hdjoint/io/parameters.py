@@ -79,9 +79,11 @@ def meaning(name: str) -> str:
     return re.sub(r",[^,]* eq\.$", "", first)
 
 
-def values_in_text(values: dict[str, float]) -> str:
-    """'omega_s = 20 rad/s, Kt_warmup_tc = 10 s': parameter values in a sentence."""
-    return ", ".join(f"{n} = {v:.3g}{unit_in_text(table()[n].unit)}" for n, v in values.items())
+def values_in_text(values: dict[str, float], described: bool = False) -> str:
+    """'omega_s = 20 rad/s, Kt_warmup_tc = 10 s': parameter values in a sentence
+    (`described`: each after its meaning, 'Stribeck speed omega_s = 20 rad/s')."""
+    return ", ".join(f"{meaning(n) + ' ' if described else ''}{n} = {v:.3g}{unit_in_text(table()[n].unit)}"
+                     for n, v in values.items())
 
 
 def encoder_step(counts: float) -> float:
