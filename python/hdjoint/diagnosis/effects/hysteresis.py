@@ -87,4 +87,4 @@ EFFECT = Hysteresis(
     # No detection limit: a planting follows the measured torsion, a joint's loop follows the
     # true one, and its test misses loops switching within an encoder count far beyond the size
     # at which a planting shows. A limit that does not hold is worse than none.
-    stateful=True, resizes=("hys_H", "hys_sigma"), own_gain_checked=True, uneven_over_folds=True, rank=5)
+    stateful=True, resizes=("hys_H", "hys_sigma"), own_gain_checked=True, rank=5)
