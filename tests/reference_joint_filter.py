@@ -123,6 +123,9 @@ def joint_filter(p, i_m, theta_m, theta_l):
         store["P_prior"].append(P.copy())
         store["F"].append(F)
         R = R0 + np.diag(REPEAT_WEIGHT * repeated[k] * quantisation)
+        if k > 0:  # readings taken off their sample time move along the angles' rates (as documented)
+            rates = np.array([p["N"] * (x[1] + x[3]), x[1]])
+            R = R + p["jsf_r_time"] ** 2 * np.outer(rates, rates)
         S = H @ P @ H.T + R
         K = P @ H.T @ np.linalg.inv(S)
         x = x + K @ (z - H @ x)

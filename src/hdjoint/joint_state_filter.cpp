@@ -224,6 +224,17 @@ Matrix<2> JointStateFilter::reading_covariance(double theta_m, double theta_l) {
     return R;
 }
 
+Matrix<2> JointStateFilter::timing_covariance() const {
+    // A reading taken dt after its sample moves both angles along their rates
+    // v = (theta_m', theta_l'): variance jsf_r_time^2 * v v^T. The torsion
+    // (theta_m/N - theta_l) moves only with its own rate nu, so the readings'
+    // common motion is discounted and the torsion kept.
+    using namespace joint_state;
+    const JointState& x = kalman_.state();
+    const Vector<2> v(p_.N * (x(kOmegaL) + x(kNu)), x(kOmegaL));
+    return (p_.jsf_r_time * p_.jsf_r_time) * (v * v.transpose());
+}
+
 double JointStateFilter::gate(const Vector<2>& z) const {
     // A filter told its readings are exact (no quantisation, no noise) has
     // NIS in the millions on a model error of a micro-radian: only an
@@ -256,7 +267,7 @@ FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointI
         record_.F.setIdentity();
         record_.x_prior = kalman_.state();
         record_.P_prior = kalman_.covariance();
-        update = kalman_.update(measurement_, z, R);
+        update = kalman_.update(measurement_, z, R);  // at rest: no timing term
         accepted_ = in;
         started_ = true;
     } else {
@@ -265,7 +276,7 @@ FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointI
         status = kalman_.predict(system_, previous_, Q);
         record_.x_prior = kalman_.state();
         record_.P_prior = kalman_.covariance();
-        update = readable ? kalman_.update(measurement_, z, R, gate(z)) : decltype(update){};
+        update = readable ? kalman_.update(measurement_, z, R + timing_covariance(), gate(z)) : decltype(update){};
         if (!readable || update.status == FilterStatus::SampleRejected) {
             // The current held since the last sample may be the outlier:
             // predict again with the last one that passed; if the readings
@@ -275,7 +286,7 @@ FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointI
             status = std::max(status, kalman_.predict(system_, accepted_, Q));
             record_.x_prior = kalman_.state();
             record_.P_prior = kalman_.covariance();
-            if (readable) update = kalman_.update(measurement_, z, R, gate(z));
+            if (readable) update = kalman_.update(measurement_, z, R + timing_covariance(), gate(z));
             readings_rejected_ = readable && update.status == FilterStatus::SampleRejected;
             update.nis = rejected_nis;
             update.status = FilterStatus::SampleRejected;

@@ -258,6 +258,8 @@ private:
     double repeats_m_ = 0.0, repeats_l_ = 0.0;
     double quantisation_m_ = 0.0, quantisation_l_ = 0.0;  // q^2/12 of each encoder, rad^2
     Matrix<2> reading_covariance(double theta_m, double theta_l);
+    // The readings' variance from when they were taken (jsf_r_time), at the predicted state.
+    Matrix<2> timing_covariance() const;
     double adapt_weight_ = 0.0;  // Ts / jsf_load_adapt_time (0: off)
     JointCovariance process_noise() const;
     // The NIS gate for readings z at the predicted state: kOutlierGate, or
