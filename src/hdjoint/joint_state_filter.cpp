@@ -271,7 +271,10 @@ FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointI
         accepted_ = in;
         started_ = true;
     } else {
-        const UnscentedKalmanFilter<kJointStates> before = kalman_;
+        // Only the state and covariance change in a prediction and update (a
+        // copy of the whole filter, its P0 and weights, cost a tenth of a step).
+        const JointState x_before = kalman_.state();
+        const JointCovariance P_before = kalman_.covariance();
         const JointCovariance Q = process_noise();
         status = kalman_.predict(system_, previous_, Q);
         record_.x_prior = kalman_.state();
@@ -282,7 +285,8 @@ FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointI
             // predict again with the last one that passed; if the readings
             // still fail, only predict (P grows, and so does tau_std).
             const double rejected_nis = update.nis;
-            kalman_ = before;
+            kalman_.state() = x_before;
+            kalman_.covariance() = P_before;
             status = std::max(status, kalman_.predict(system_, accepted_, Q));
             record_.x_prior = kalman_.state();
             record_.P_prior = kalman_.covariance();
