@@ -2,7 +2,7 @@
 RTS smoother (tau_hat, tau_smooth), a test oracle for the C++ code.
 
 Written from the model as documented in joint_state_filter.h and the README
-(state [theta_l, omega_l, delta, nu, w, r, g], two-mass dynamics driven by the
+(state [theta_l, omega_l, delta, nu, w, r, g, e], two-mass dynamics driven by the
 current, linearly implicit trapezoidal step, floor-quantised encoder
 readings), not from the C++ sources. Deliberately different in method where
 it can be: the Jacobian of the dynamics comes from complex-step
@@ -22,25 +22,27 @@ TWO_PI = 2 * np.pi
 P0_ANGLE, P0_TORSION, P0_SPEED = 1e-2, 1e-3, 0.1
 # The link inertia's relative error g: its prior deviation and random walk per sample (as documented).
 P0_INERTIA, Q_INERTIA = 0.1, 1e-5
-N_STATES = 7
+# The compliance model's error e: its prior is what its walk spreads in a second, at least 1e-6 N.m.
+MIN_TORQUE_ERROR_STD = 1e-6
+N_STATES = 8
 
 
 def joint_torque(p, x, i_m):
-    """Transmitted torque of a state (works for complex x: complex-step)."""
+    """Transmitted torque of a state, the compliance model plus its error e (works for complex x: complex-step)."""
     theta_l, delta = x[0], x[2]
     theta_m = p["N"] * (theta_l + delta)
     dtheta_f = delta - wave_generator_torsion(p, p["Kt"] * i_m) - kinematic_error(p, theta_m, theta_l)
-    return torque_from_torsion(p, dtheta_f)
+    return torque_from_torsion(p, dtheta_f) + x[7]
 
 
 def dynamics(p, x, i_m):
-    theta_l, omega_l, delta, nu, w, rate, g = x
+    theta_l, omega_l, delta, nu, w, rate, g, e = x
     tau = joint_torque(p, x, i_m)
     omega_m = p["N"] * (omega_l + nu)
     friction = p["Fc"] * np.tanh(omega_m / p["omega_fc"]) + p["Bm"] * omega_m
     link_acc = (tau - p["Bl"] * omega_l - p["mgl"] * np.sin(theta_l) - w) / (p["Jl"] * (1 + g))
     motor_acc = (p["Kt"] * i_m - friction - tau / p["N"]) / (p["N"] * p["Jm"])  # of omega_l + nu
-    return np.array([omega_l, link_acc, nu, motor_acc - link_acc, rate, 0.0 * w, 0.0 * g])
+    return np.array([omega_l, link_acc, nu, motor_acc - link_acc, rate, 0.0 * w, 0.0 * g, 0.0 * e])
 
 
 def complex_step_jacobian(fun, x, h=1e-30):
@@ -69,11 +71,12 @@ def transition(p, x, i_m):
 def noise(p):
     h = p["Ts"]
     a = np.hypot(p["Kt"] * p["jsf_current_noise"], p["jsf_q_motor"]) / (p["N"] * p["Jm"])
-    G = np.array([0.0, 0.0, h * h / 2, h, 0.0, 0.0, 0.0])
+    G = np.array([0.0, 0.0, h * h / 2, h, 0.0, 0.0, 0.0, 0.0])
     Q = a * a * np.outer(G, G)
     Q[4, 4] += p["jsf_q_load"] ** 2
     Q[5, 5] += p["jsf_q_load_rate"] ** 2
     Q[6, 6] += Q_INERTIA ** 2
+    Q[7, 7] += p["jsf_q_torque"] ** 2
     qm = TWO_PI / p["motor_counts"] if p["motor_counts"] > 0 else 0.0
     ql = TWO_PI / p["link_counts"] if p["link_counts"] > 0 else 0.0
     R = np.diag([max(p["jsf_r_theta_m"] ** 2 + qm * qm / 12, 1e-24), max(p["jsf_r_theta_l"] ** 2 + ql * ql / 12, 1e-24)])
@@ -98,7 +101,7 @@ def joint_filter(p, i_m, theta_m, theta_l):
     n = len(i_m)
     Q, R0, offset, quantisation = noise(p)
     repeated = np.column_stack([repeats(theta_m), repeats(theta_l)])
-    H = np.array([[p["N"], 0, p["N"], 0, 0, 0, 0], [1.0, 0, 0, 0, 0, 0, 0]])
+    H = np.array([[p["N"], 0, p["N"], 0, 0, 0, 0, 0], [1.0, 0, 0, 0, 0, 0, 0, 0]])
     out = {"tau_hat": np.empty(n), "tau_hat_std": np.empty(n)}
     store = {"x": [], "P": [], "x_prior": [], "P_prior": [], "F": []}
     x = P = None
@@ -110,7 +113,8 @@ def joint_filter(p, i_m, theta_m, theta_l):
             x[2] = z[0] / p["N"] - z[1]
             x[4] = joint_torque(p, x, i_m[0]) - p["mgl"] * np.sin(x[0])
             P = np.diag([P0_ANGLE**2, P0_SPEED**2, P0_TORSION**2, P0_SPEED**2, p["jsf_p0_load"] ** 2,
-                         p["jsf_p0_load"] ** 2, P0_INERTIA**2])
+                         p["jsf_p0_load"] ** 2, P0_INERTIA**2,
+                         max(p["jsf_q_torque"] / np.sqrt(p["Ts"]), MIN_TORQUE_ERROR_STD) ** 2])
             F = np.eye(N_STATES)
         else:
             x, F = transition(p, x, i_m[k - 1])
@@ -119,6 +123,9 @@ def joint_filter(p, i_m, theta_m, theta_l):
         store["P_prior"].append(P.copy())
         store["F"].append(F)
         R = R0 + np.diag(REPEAT_WEIGHT * repeated[k] * quantisation)
+        if k > 0:  # readings taken off their sample time move along the angles' rates (as documented)
+            rates = np.array([p["N"] * (x[1] + x[3]), x[1]])
+            R = R + p["jsf_r_time"] ** 2 * np.outer(rates, rates)
         S = H @ P @ H.T + R
         K = P @ H.T @ np.linalg.inv(S)
         x = x + K @ (z - H @ x)

@@ -16,6 +16,7 @@ constexpr double kMinReadingVariance = 1e-24;
 // Initial spread of the states the first reading does not fix (link speed,
 // torsion rate in rad/s; angles in rad); the first update then sets them.
 constexpr double kP0Angle = 1e-2, kP0Torsion = 1e-3, kP0Speed = 0.1;
+constexpr double kMinTorqueErrorStd = 1e-6;  // N.m
 
 double resolution(double counts) { return counts > 0.0 ? kTwoPi / counts : 0.0; }
 }  // namespace
@@ -35,7 +36,7 @@ JointTorque joint_state_torque(const JointState& x, const JointInput& in, const 
     }
     double e_m = 0.0, e_l = 0.0;
     kinematic_error_gradient(theta_m, theta_l, p, &e_m, &e_l);
-    t.tau = c.tau + in.z;
+    t.tau = c.tau + in.z + x(joint_state::kTorqueError);
     t.d_delta = k * (1.0 - p.N * e_m);
     t.d_theta_l = k * (-p.N * e_m - e_l);
     t.valid = std::isfinite(t.tau);
@@ -72,6 +73,7 @@ bool JointSystemModel::derivative(const State& x, const Control& u, State* dx, J
     (*dx)(kLoad) = x(kLoadRate);
     (*dx)(kLoadRate) = 0.0;
     (*dx)(kInertiaError) = 0.0;
+    (*dx)(kTorqueError) = 0.0;
 
     const double cog = cogging_on(q) ? cogging_slope(theta_m, q) : 0.0;  // d/d theta_m
     const double friction = coulomb_friction_slope(omega_m, q, scale) + q.Bm;  // d/d omega_m
@@ -82,6 +84,7 @@ bool JointSystemModel::derivative(const State& x, const Control& u, State* dx, J
     (*J)(kOmegaL, kDelta) = T.d_delta / inertia;
     (*J)(kOmegaL, kLoad) = -1.0 / inertia;
     (*J)(kOmegaL, kInertiaError) = -a_l * q.Jl / inertia;
+    (*J)(kOmegaL, kTorqueError) = 1.0 / inertia;
     (*J)(kDelta, kNu) = 1.0;
     const double am_theta_l = (cog * q.N - T.d_theta_l / q.N) / NJm;
     const double am_speed = -friction * q.N / NJm;  // by omega_l and by nu
@@ -92,6 +95,7 @@ bool JointSystemModel::derivative(const State& x, const Control& u, State* dx, J
     (*J)(kNu, kNu) = am_speed;
     (*J)(kNu, kLoad) = -(*J)(kOmegaL, kLoad);
     (*J)(kNu, kInertiaError) = -(*J)(kOmegaL, kInertiaError);
+    (*J)(kNu, kTorqueError) = -1.0 / (q.N * NJm) - (*J)(kOmegaL, kTorqueError);
     (*J)(kLoad, kLoadRate) = 1.0;
     return dx->allFinite() && J->allFinite();
 }
@@ -106,7 +110,7 @@ JointState JointSystemModel::step(const State& x, const Control& u, JointCovaria
     }
     // M = I - c*J, c = h/2. J's rows kThetaL, kDelta, kLoad are the
     // kinematic identities (d theta_l = omega_l, d delta = nu, d w = r) and
-    // rows kLoadRate and kInertiaError are zero, so M z = y reduces to a 2x2 system in
+    // rows kLoadRate, kInertiaError and kTorqueError are zero, so M z = y reduces to a 2x2 system in
     // (z_omega_l, z_nu): solved in closed form (the same numbers as a general
     // LU up to round-off, at a fraction of its cost).
     using namespace joint_state;
@@ -120,10 +124,12 @@ JointState JointSystemModel::step(const State& x, const Control& u, JointCovaria
         State z;
         z(kLoadRate) = y(kLoadRate);
         z(kInertiaError) = y(kInertiaError);
+        z(kTorqueError) = y(kTorqueError);
         z(kLoad) = y(kLoad) + c * z(kLoadRate);
         auto rhs = [&](int row) {
             return y(row) + c * (J(row, kThetaL) * y(kThetaL) + J(row, kDelta) * y(kDelta) + J(row, kLoad) * z(kLoad) +
-                                 J(row, kLoadRate) * z(kLoadRate) + J(row, kInertiaError) * z(kInertiaError));
+                                 J(row, kLoadRate) * z(kLoadRate) + J(row, kInertiaError) * z(kInertiaError) +
+                                 J(row, kTorqueError) * z(kTorqueError));
         };
         const double r1 = rhs(kOmegaL), r3 = rhs(kNu);
         z(kOmegaL) = (a33 * r1 - a13 * r3) / det;
@@ -156,6 +162,7 @@ JointStateFilter::JointStateFilter(const Parameters& p) : p_(p) {
     Q_(kLoad, kLoad) = p.jsf_q_load * p.jsf_q_load;
     Q_(kLoadRate, kLoadRate) = p.jsf_q_load_rate * p.jsf_q_load_rate;
     Q_(kInertiaError, kInertiaError) = kQInertiaError * kQInertiaError;
+    Q_(kTorqueError, kTorqueError) = p.jsf_q_torque * p.jsf_q_torque;
     // Floor quantisers: reading + q/2 is unbiased, variance q^2/12.
     const double qm = resolution(p.motor_counts), ql = resolution(p.link_counts);
     offset_m_ = 0.5 * qm;
@@ -173,6 +180,9 @@ JointStateFilter::JointStateFilter(const Parameters& p) : p_(p) {
     sd0(kLoad) = p.jsf_p0_load;
     sd0(kLoadRate) = p.jsf_p0_load;  // per second
     sd0(kInertiaError) = kP0InertiaError;
+    // What the walk spreads in a second (floored: a zero row would leave the
+    // smoother's predicted covariance singular).
+    sd0(kTorqueError) = std::max(p.jsf_q_torque / std::sqrt(p.Ts), kMinTorqueErrorStd);
     const JointCovariance P0 = sd0.cwiseAbs2().asDiagonal();
     adapt_weight_ = p.jsf_load_adapt_time > 0.0 ? std::min(1.0, p.Ts / p.jsf_load_adapt_time) : 0.0;
     kalman_ = UnscentedKalmanFilter<kJointStates>(merwe_weights<kJointStates>(1.0, 2.0, 0.0), JointState::Zero(), P0);
@@ -193,8 +203,10 @@ JointCovariance JointStateFilter::process_noise() const {
 
 double JointStateFilter::torque_variance(const JointTorque& T, const JointCovariance& P) {
     using namespace joint_state;
+    // The gradient by e is 1.
     return T.d_theta_l * T.d_theta_l * P(kThetaL, kThetaL) + 2.0 * T.d_theta_l * T.d_delta * P(kThetaL, kDelta) +
-           T.d_delta * T.d_delta * P(kDelta, kDelta);
+           T.d_delta * T.d_delta * P(kDelta, kDelta) + P(kTorqueError, kTorqueError) +
+           2.0 * (T.d_theta_l * P(kThetaL, kTorqueError) + T.d_delta * P(kDelta, kTorqueError));
 }
 
 Matrix<2> JointStateFilter::reading_covariance(double theta_m, double theta_l) {
@@ -210,6 +222,17 @@ Matrix<2> JointStateFilter::reading_covariance(double theta_m, double theta_l) {
     R(0, 0) += kRepeatedReadingWeight * repeats_m_ * quantisation_m_;
     R(1, 1) += kRepeatedReadingWeight * repeats_l_ * quantisation_l_;
     return R;
+}
+
+Matrix<2> JointStateFilter::timing_covariance() const {
+    // A reading taken dt after its sample moves both angles along their rates
+    // v = (theta_m', theta_l'): variance jsf_r_time^2 * v v^T. The torsion
+    // (theta_m/N - theta_l) moves only with its own rate nu, so the readings'
+    // common motion is discounted and the torsion kept.
+    using namespace joint_state;
+    const JointState& x = kalman_.state();
+    const Vector<2> v(p_.N * (x(kOmegaL) + x(kNu)), x(kOmegaL));
+    return (p_.jsf_r_time * p_.jsf_r_time) * (v * v.transpose());
 }
 
 double JointStateFilter::gate(const Vector<2>& z) const {
@@ -244,26 +267,30 @@ FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointI
         record_.F.setIdentity();
         record_.x_prior = kalman_.state();
         record_.P_prior = kalman_.covariance();
-        update = kalman_.update(measurement_, z, R);
+        update = kalman_.update(measurement_, z, R);  // at rest: no timing term
         accepted_ = in;
         started_ = true;
     } else {
-        const UnscentedKalmanFilter<kJointStates> before = kalman_;
+        // Only the state and covariance change in a prediction and update (a
+        // copy of the whole filter, its P0 and weights, cost a tenth of a step).
+        const JointState x_before = kalman_.state();
+        const JointCovariance P_before = kalman_.covariance();
         const JointCovariance Q = process_noise();
         status = kalman_.predict(system_, previous_, Q);
         record_.x_prior = kalman_.state();
         record_.P_prior = kalman_.covariance();
-        update = readable ? kalman_.update(measurement_, z, R, gate(z)) : decltype(update){};
+        update = readable ? kalman_.update(measurement_, z, R + timing_covariance(), gate(z)) : decltype(update){};
         if (!readable || update.status == FilterStatus::SampleRejected) {
             // The current held since the last sample may be the outlier:
             // predict again with the last one that passed; if the readings
             // still fail, only predict (P grows, and so does tau_std).
             const double rejected_nis = update.nis;
-            kalman_ = before;
+            kalman_.state() = x_before;
+            kalman_.covariance() = P_before;
             status = std::max(status, kalman_.predict(system_, accepted_, Q));
             record_.x_prior = kalman_.state();
             record_.P_prior = kalman_.covariance();
-            if (readable) update = kalman_.update(measurement_, z, R, gate(z));
+            if (readable) update = kalman_.update(measurement_, z, R + timing_covariance(), gate(z));
             readings_rejected_ = readable && update.status == FilterStatus::SampleRejected;
             update.nis = rejected_nis;
             update.status = FilterStatus::SampleRejected;

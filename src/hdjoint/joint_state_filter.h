@@ -3,7 +3,7 @@
 // filter on the raw encoder angles, driven by the motor current, and an
 // offline Rauch-Tung-Striebel smoother over it.
 //
-// State x = [theta_l, omega_l, delta, nu, w, r, g] (link-side units):
+// State x = [theta_l, omega_l, delta, nu, w, r, g, e] (link-side units):
 //   theta_l, omega_l  link angle and speed,
 //   delta = theta_m/N - theta_l   total torsion (its own state: theta_m/N and
 //                                 theta_l are almost perfectly correlated),
@@ -16,7 +16,15 @@
 //                                 inertia is Jl*(1 + g), g a constant the filter learns
 //                                 (prior kP0InertiaError); a Jl 5 % off otherwise makes
 //                                 the load w follow 5 % of the inertial torque.
-//   d(w)/dt = r, d(r)/dt = noise, d(g)/dt = 0
+//   e                             the compliance model's error, N.m: the transmitted
+//                                 torque is tau(x) + e, e a random walk (jsf_q_torque).
+//                                 A stiffness or kinematic error, hysteresis: the motor
+//                                 equation sees them and the encoders cannot. Without it
+//                                 such an error is a conflict between the current and the
+//                                 readings that the filter settles with a lag and the
+//                                 smoother, from both sides, without one: tau_smooth then
+//                                 follows the wrong compliance model more than tau_hat.
+//   d(w)/dt = r, d(r)/dt = noise, d(g)/dt = 0, d(e)/dt = noise
 // Dynamics, with tau(x) the transmitted torque of the corrected compliance
 // chain (eq. 3-8 with kinematic error, wave generator, backlash, the
 // hysteresis torque z of the compliance model):
@@ -40,10 +48,19 @@
 
 namespace hdjoint {
 
-constexpr int kJointStates = 7;
+constexpr int kJointStates = 8;
 // Named indices of the state vector.
 namespace joint_state {
-enum Index : int { kThetaL = 0, kOmegaL = 1, kDelta = 2, kNu = 3, kLoad = 4, kLoadRate = 5, kInertiaError = 6 };
+enum Index : int {
+    kThetaL = 0,
+    kOmegaL = 1,
+    kDelta = 2,
+    kNu = 3,
+    kLoad = 4,
+    kLoadRate = 5,
+    kInertiaError = 6,
+    kTorqueError = 7
+};
 }
 using JointState = Vector<kJointStates>;
 using JointCovariance = Matrix<kJointStates>;
@@ -56,7 +73,8 @@ struct JointInput {
     double t = 0.0;
 };
 
-// The transmitted torque of a state and its gradient by the state.
+// The transmitted torque of a state (tau(x) + e) and its gradient by the state
+// (by e it is 1).
 struct JointTorque {
     double tau = 0.0;
     double d_theta_l = 0.0;  // d tau / d theta_l
@@ -204,8 +222,8 @@ public:
     const JointCovariance& covariance() const { return kalman_.covariance(); }
     bool started() const { return started_; }
 
-    // Flat state: 1 + 7 + 49 + 3 + 3 + 4 + 2 + 2 + 4 values.
-    static constexpr std::size_t kSavedSize = 75;
+    // Flat state: 1 + 8 + 64 + 3 + 3 + 4 + 2 + 2 + 4 values.
+    static constexpr std::size_t kSavedSize = 91;
 
     // The variance of a torque at a state of covariance P (first order).
     static double torque_variance(const JointTorque& T, const JointCovariance& P);
@@ -240,6 +258,8 @@ private:
     double repeats_m_ = 0.0, repeats_l_ = 0.0;
     double quantisation_m_ = 0.0, quantisation_l_ = 0.0;  // q^2/12 of each encoder, rad^2
     Matrix<2> reading_covariance(double theta_m, double theta_l);
+    // The readings' variance from when they were taken (jsf_r_time), at the predicted state.
+    Matrix<2> timing_covariance() const;
     double adapt_weight_ = 0.0;  // Ts / jsf_load_adapt_time (0: off)
     JointCovariance process_noise() const;
     // The NIS gate for readings z at the predicted state: kOutlierGate, or

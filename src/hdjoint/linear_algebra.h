@@ -16,8 +16,10 @@ enum class FactorStatus { Ok, Repaired, Failed };
 
 template <int N>
 void symmetrize(Matrix<N>* P) {
-    // eval(): P + P^T read while P is written would alias (Eigen evaluates lazily).
-    *P = (0.5 * (*P + P->transpose())).eval();
+    // In place, each off-diagonal pair once (the same numbers as 0.5 (P + P^T)
+    // without its temporary: the diagonal is unchanged by it).
+    for (int j = 0; j < N; ++j)
+        for (int i = j + 1; i < N; ++i) (*P)(i, j) = (*P)(j, i) = 0.5 * ((*P)(i, j) + (*P)(j, i));
 }
 
 // Lower Cholesky factor of P. When P is not numerically positive definite,

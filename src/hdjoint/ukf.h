@@ -57,7 +57,10 @@ public:
                 status = FilterStatus::CovarianceReset;
             }
             x_ = system.step(x_, u, &F_);
-            P_ = F_ * P_ * F_.transpose() + Q;
+            Covariance FP;
+            FP.noalias() = F_ * P_;
+            P_ = Q;
+            P_.noalias() += FP * F_.transpose();
             symmetrize(&P_);
             return status;
         }

@@ -58,6 +58,14 @@ def test_batch_equals_oracle_to_round_off(batch, oracle, name):
     assert np.max(np.abs(a - b)) <= 1e-9 * max(1.0, np.max(np.abs(b))), np.max(np.abs(a - b))
 
 
+def test_batch_equals_oracle_with_reading_time_jitter(short_recording, params):
+    r, p = short_recording, {**params, "jsf_r_time": 5e-5}
+    a = _core.run_estimator(p, r.time, r.i_m, r.theta_m, r.theta_l)["tau_hat"]
+    b = joint_filter(p, r.i_m, r.theta_m, r.theta_l)[0]["tau_hat"]
+    assert np.max(np.abs(a - b)) <= 1e-9 * max(1.0, np.max(np.abs(b)))
+    assert np.max(np.abs(a - _core.run_estimator(params, r.time, r.i_m, r.theta_m, r.theta_l)["tau_hat"])) > 1e-4
+
+
 def test_fmu_equals_batch_exactly(short_recording, params, batch):
     r = short_recording
     fmu = run_estimator_fmu(r.time, r.i_m, r.theta_m, r.theta_l, params)
