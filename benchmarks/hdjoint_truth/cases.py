@@ -7,7 +7,8 @@ each joint is recorded twice with different excitations: the second
 recording checks that the corrected model closes on data it never saw.
 
 Effect sizes are the concealed ones of hdjoint.fmu.concealed_effects (about the noise and
-quantisation level), jittered by +-20 % per seed."""
+quantisation level), jittered by +-20 % per seed. OPEN_LIBRARY_CASES plant
+physics the effect library does not name, and a LuGre control (outside.py)."""
 from __future__ import annotations
 
 import zlib
