@@ -5,8 +5,8 @@ with the load) and a LuGre-friction control, each diagnosed by `hdjoint
 diagnose` (diagnosis_independent.diagnose_csv) on its first recording
 against the nominal set, with and without the torque sensor's column.
 
-Per run: the verdict, the unexplained entries (size, share of the torque
-span), the proposed terms with their held-out gain, and whether a proposal
+Per run: the verdict, the unexplained entries (size beyond the sensors'
+floor, share of the torque span, what located them), the proposed terms with their held-out gain, and whether a proposal
 names the planted physics (MATCHES). Goals: no open-library case is
 `consistent`; a matching term is proposed in at least 2 of the 3; the
 control stays `consistent`.
@@ -62,19 +62,25 @@ def run(job: tuple[str, int, bool]) -> dict:
             "wall_seconds": round(wall, 1), "verdict": doc["verdict"],
             "findings": [f"{f['effect']} ({f.get('kind', 'added')})" for f in doc["findings"]],
             "unexplained": [{"channel": u.get("channel"), "size_Nm": u.get("size_Nm"),
-                             "share_of_span": u.get("share_of_span"), "feature": u["feature"]}
-                            for u in doc.get("unexplained") or []],
+                             "share_of_span": u.get("share_of_span"), "feature": u["feature"],
+                             "held_out_gain": u.get("held_out_gain")} for u in doc.get("unexplained") or []],
+            # Each channel's held-out miss beyond its sensors' floor (floors.py), N.m and share of the span.
+            "miss": {name: [c["miss"], c["miss_share_of_span"]] for name, c in doc["accuracy"]["channels"].items()},
             "proposed_terms": proposals, "matched": any(p["matches"] for p in proposals)}
 
 
 def _unexplained(row: dict) -> str:
-    """Each entry in words: its channel and size, or its located feature."""
+    """Each entry in words: its channel, its size beyond the floor (an entry
+    of floors.py's, or the channel's miss beside located structure) and what
+    located it, with the share of the held-out residual that explains."""
     said = []
     for u in row["unexplained"]:
-        if u["size_Nm"] is not None:
-            said.append(f"{u['channel']}: {u['size_Nm']:.3g} N.m ({100 * u['share_of_span']:.1f} % of span)")
-        else:
-            said.append(f"{u['channel']}: {u['feature'][:60]}")
+        size, share = (u["size_Nm"], u["share_of_span"]) if u["size_Nm"] is not None else \
+            row.get("miss", {}).get(u["channel"], (None, None))
+        sized = f"{size:.3g} N.m ({100 * share:.1f} % of span)" if size is not None else "size not measured"
+        located = "" if u["size_Nm"] is not None else f", located by {u['feature']}" + (
+            f" ({100 * u['held_out_gain']:.0f} % of it held out)" if u.get("held_out_gain") is not None else "")
+        said.append(f"{u['channel']}: {sized}{located}")
     return "; ".join(said) or "-"
 
 
@@ -104,7 +110,7 @@ def write_table(rows: list[dict]) -> str:
              f"| form controls (LuGre) not `consistent` | "
              f"{sum(r['verdict'] != 'consistent' for c in controls for r in runs[c.name])}/"
              f"{sum(len(runs[c.name]) for c in controls)} | 0 |", "",
-             "| case | seed | torque sensor | excitation | verdict | findings | unexplained | proposed terms | "
+             "| case | seed | torque sensor | excitation | verdict | findings | unexplained (miss beyond the sensors' floor; what located it) | proposed terms | "
              "matches the planted physics | s |", "|---|---|---|---|---|---|---|---|---|---|"]
     for c in cases:
         for r in sorted(runs[c.name], key=lambda r: (r["seed"], not r["sensor"])):
