@@ -11,4 +11,5 @@ model form gets wrong and not only what its parameters do.
   excitations.py  link position references (paper, multisine, sweep, constant speeds, chirp)
   simulate.py     the digital controller and the fixed-step integrators
   cases.py        benchmark cases: an effect concealed, the nominal set, seeds
+  outside.py      physics outside the diagnosis's effect library, and a LuGre control
 """

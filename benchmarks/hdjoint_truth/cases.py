@@ -7,7 +7,8 @@ each joint is recorded twice with different excitations: the second
 recording checks that the corrected model closes on data it never saw.
 
 Effect sizes are the concealed ones of hdjoint.fmu.concealed_effects (about the noise and
-quantisation level), jittered by +-20 % per seed."""
+quantisation level), jittered by +-20 % per seed. OPEN_LIBRARY_CASES plant
+physics the effect library does not name, and a LuGre control (outside.py)."""
 from __future__ import annotations
 
 import zlib
@@ -18,6 +19,7 @@ import numpy as np
 from hdjoint.diagnosis.effects import EFFECTS, TruthDraw
 from hdjoint.io import parameters
 from hdjoint_truth.excitations import EXCITATIONS
+from hdjoint_truth.outside import LAWS
 from hdjoint_truth.physics import Form
 from hdjoint_truth.sensors import CurrentSensor, Encoder
 from hdjoint_truth.simulate import Controller, Setup, simulate
@@ -34,6 +36,7 @@ class TruthCase:
     present: tuple[str, ...]                   # effect IDs the truth has and the nominal set lacks
     nominal_off: dict = field(default_factory=dict)  # how the nominal set switches them off
     excitation: str = ""                       # first recording's excitation ("" : drawn per seed)
+    outside: str = ""                          # a law outside the effect library (outside.LAWS), planted too
 
 
 def _effect(name, present, **off):
@@ -61,6 +64,14 @@ EFFECT_CASES = [
             Kw=1e9, Cw=0.0, Bm=0.0),
 ]
 CONTROL_CASES = [TruthCase(f"control on {kind}", (), {}, kind) for kind in KINDS]
+# Physics the effect library does not name (the open library's cases), and a
+# friction law of another form with nothing missing (a control).
+OPEN_LIBRARY_CASES = [
+    TruthCase("outside: motor friction varying with the motor angle", (), outside="friction_ripple"),
+    TruthCase("outside: kinematic error growing with the torque", (), outside="kinematic_torque"),
+    TruthCase("outside: friction growing with the load", (), outside="friction_load"),
+    TruthCase("control: LuGre friction", (), outside="lugre"),
+]
 
 
 @dataclass
@@ -139,11 +150,13 @@ def draw(case: TruthCase, seed: int, duration: float = 30.0, recordings: int = 2
                            colour_time=float(rng.uniform(0.005, 0.05)))
     for effect in case.present:
         _add_effect(effect, truth, form, sensor, rng, size)
+    if case.outside:  # drawn after everything the other cases draw: theirs do not move
+        LAWS[case.outside](truth, form, sensor, rng)
     first = case.excitation or KINDS[seed % len(KINDS)]
     others = [k for k in KINDS if k != first]
     kinds = [first] + [others[(seed + j) % len(others)] for j in range(recordings - 1)]
     setups = [_draw_setup(rng, kind, duration, 1000 * seed + j + 1, sensor) for j, kind in enumerate(kinds)]
-    description = {"friction": form.friction, "omega_fc": round(form.omega_fc, 3), "integrator": form.integrator,
+    description = {"friction": form.friction, **({"outside": case.outside} if case.outside else {}), "omega_fc": round(form.omega_fc, 3), "integrator": form.integrator,
                    "substeps": form.substeps, "hysteresis": form.hysteresis, "thermal": form.thermal,
                    "excitations": kinds, "jitter_us": [round(s.jitter * 1e6) for s in setups]}
     return Joint(truth, form, nominal, setups, description)

@@ -28,6 +28,7 @@ class Form:
     # Outside the diagnosis' named library (for the open-library fallback):
     friction_ripple: tuple = ()     # (order, r): friction level times 1 + r*cos(order*theta_m)
     kinematic_torque: tuple = ()    # (order, c): theta_err += c*tau_f*cos(order*theta_m), rad per N.m
+    friction_load: float = 0.0      # Coulomb level rises by this times the transmitted torque |tau_f|/N
 
 
 def kinematic_terms(p: dict, form: Form) -> list[tuple[bool, float, float, float]]:
@@ -94,10 +95,13 @@ def stribeck_shape(form: Form, omega: float, omega_s: float) -> float:
     return math.exp(-x * x) if form.stribeck == "gauss" else math.exp(-abs(x))
 
 
-def friction_level(p: dict, form: Form, omega: float, t: float, theta_m: float = 0.0) -> float:
-    """Coulomb plus Stribeck level g(omega) > 0, with the warm-up when friction warms
-    and the position ripple when the form has one."""
+def friction_level(p: dict, form: Form, omega: float, t: float, theta_m: float = 0.0, tau_f: float = 0.0) -> float:
+    """Coulomb plus Stribeck level g(omega) > 0, with the warm-up when friction warms,
+    the position ripple and the load's share (of the transmitted torque tau_f)
+    when the form has them."""
     g = p["Fc"] + p.get("Fs", 0.0) * stribeck_shape(form, omega, p.get("omega_s", 10.0))
+    if form.friction_load:
+        g += form.friction_load * abs(tau_f) / p["N"]
     if form.friction_ripple:
         order, r = form.friction_ripple
         g *= 1.0 + r * math.cos(order * theta_m)

@@ -127,7 +127,7 @@ class _Plant:
     def _motor_friction(self, t: float) -> tuple[float, float]:
         """(friction torque, its slope in omega_m) of the tanh law, Bm included."""
         f = self.form
-        g = physics.friction_level(self.p, f, self.omega_m, t, self.theta_m)
+        g = physics.friction_level(self.p, f, self.omega_m, t, self.theta_m, self.tau_f)
         th = math.tanh(self.omega_m / f.omega_fc)
         return g * th + self.Bm * self.omega_m, g / f.omega_fc * (1.0 - th * th) + self.Bm
 
@@ -145,7 +145,7 @@ class _Plant:
             return
         if f.friction == "lugre":
             s0, s1 = f.lugre_sigma0, f.lugre_sigma1
-            g = physics.friction_level(p, f, self.omega_m, t, self.theta_m)
+            g = physics.friction_level(p, f, self.omega_m, t, self.theta_m, self.tau_f)
             zdot = self.omega_m - s0 * abs(self.omega_m) * self.z_fric / g
             # The friction's slope in omega_m over the step: the bristles take
             # the motion only while they are not yet deflected to their
@@ -159,7 +159,7 @@ class _Plant:
         wm = self.omega_m + h * (drive - fric - tau_f / self.N) / self.Jm / (1.0 + h * c_m / self.Jm)
         wl = self.omega_l + h * (tau_f - load) / self.Jl / (1.0 + h * c_l / self.Jl)
         if f.friction == "lugre":
-            g = physics.friction_level(p, f, wm, t, self.theta_m)
+            g = physics.friction_level(p, f, wm, t, self.theta_m, self.tau_f)
             self.z_fric = (self.z_fric + h * wm) / (1.0 + h * f.lugre_sigma0 * abs(wm) / g)
         self.omega_m, self.omega_l = wm, wl
         self.theta_m += h * wm

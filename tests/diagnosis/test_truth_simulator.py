@@ -183,3 +183,23 @@ def test_parameter_errors_are_drawn_within_the_bounds_given_and_leave_the_rest_a
     # The same draw, scaled to the wider bound.
     assert exact_kt.truth["Kf"] / exact_kt.nominal["Kf"] - 1 == pytest.approx(
         2 * (default.truth["Kf"] / default.nominal["Kf"] - 1))
+
+
+
+def test_the_open_library_laws_are_planted_as_stated_and_only_in_their_cases():
+    from hdjoint_truth.cases import OPEN_LIBRARY_CASES
+    form = Form(friction_ripple=(2.0, 0.2), friction_load=0.06)
+    level = physics.friction_level(NOMINAL, form, 50.0, 0.0, theta_m=0.3, tau_f=-4.0)
+    assert level == pytest.approx((NOMINAL["Fc"] + 0.06 * 4.0 / NOMINAL["N"]) * (1.0 + 0.2 * math.cos(0.6)))
+    drawn = {c.outside: draw(c, 0, 1.0) for c in OPEN_LIBRARY_CASES}
+    ripple = drawn["friction_ripple"]
+    order, r = ripple.form.friction_ripple
+    # Its amplitude Fc*r: 5-9 times the current's white noise in motor torque.
+    times_noise = r * ripple.truth["Fc"] / (ripple.truth["Kt"] * ripple.setups[0].current_sensor.white)
+    assert order == 2.0 and 5.0 <= times_noise <= 9.0
+    assert drawn["kinematic_torque"].form.kinematic_torque[0] == 2.0
+    assert 0.05 <= drawn["friction_load"].form.friction_load <= 0.08
+    assert drawn["lugre"].form.friction == "lugre" and not drawn["lugre"].form.friction_load
+    for case in EFFECT_CASES + CONTROL_CASES:
+        joint = draw(case, 0, 1.0)
+        assert not (joint.form.friction_ripple or joint.form.kinematic_torque or joint.form.friction_load)

@@ -129,20 +129,35 @@ def remaining_structure(diag, p) -> list[dict]:
     regime = regime_filter(rec, diag.prep.starts)
     reference = regime(np.nan_to_num(diag.reference_torque(p)))
     loading = np.sign(np.gradient(reference))
+    speed = regime(kin.omega_m)
+    angle = np.mod(rec.theta_m, 2 * np.pi)
+    forward = speed > 0
     features = {
         "time": (diag.prep.t_rel, None, "s"),
-        "motor speed": (regime(kin.omega_m), None, "rad/s"),
+        "motor speed": (speed, None, "rad/s"),
         "motor acceleration": (regime(kin.alpha_m), None, "rad/s2"),
         "torque level": (reference, None, "N.m"),
         "torque, loading vs unloading": (reference + LOADING_CODE * (loading > 0), None, "N.m", _loading_bin),
         "motor angle (one revolution)": (rec.theta_m, 2 * np.pi, "rad"),
         "link angle": (rec.theta_l, None, "rad"),
+        # Each of these splits a feature in two: structure whose sign flips with the
+        # direction (friction that ripples with the angle or grows with the load)
+        # averages out of the feature alone.
+        "torque level, by direction of motion": (reference + LOADING_CODE * forward, None, "N.m",
+                                                 _split_bin(LOADING_CODE, "N.m", "moving forward", "moving back")),
+        "motor angle (one revolution), by direction of motion": (
+            angle + 2 * np.pi * forward, 4 * np.pi, "rad", _split_bin(2 * np.pi, "rad", "moving forward", "moving back")),
+        # A ripple whose size follows the torque: each bin's value is per N.m of it.
+        "motor angle (one revolution), in proportion to the torque": (
+            angle, 2 * np.pi, "rad", lambda lo, hi: f"{lo:.3g} to {hi:.3g} rad, growing with the torque",
+            reference - np.mean(reference[diag.train])),
     }
     scans, p_raw = [], []
     for row, c in enumerate(diag.channels):
         r = np.nan_to_num(diag.shown_residual(c, p))
+        through = kin.smooth if c.smoothed() else None
         noise = None
-        for s in scan(r, features, diag.fold, diag.train, diag.test):
+        for s in scan(r, features, diag.fold, diag.train, diag.test, through):
             scans.append((c, s))
             if not (s.gain.gain > LOCATED_GAIN and s.gain.z > LOCATED_Z and s.bin_index is not None):
                 p_raw.append(1.0)
@@ -150,7 +165,9 @@ def remaining_structure(diag, p) -> list[dict]:
             if noise is None:
                 noise = NullNoise(r[None, :]).replicates([0])
             bins = np.zeros((1, len(r), int(s.bin_index.max()) + 2))
-            bins[0, np.arange(len(r)), s.bin_index] = 1.0
+            bins[0, np.arange(len(r)), s.bin_index] = 1.0 if s.modulator is None else s.modulator
+            if through is not None:  # each bin's regressor as the channel sees it
+                bins[0] = np.column_stack([through(column) for column in bins[0].T])
             bins[0, :, -1] = 1.0  # the scan removes the training mean first
             fit_rows = np.flatnonzero(diag.train)
             p_raw.append(p_value(s.gain.z, null_z(noise, bins, fit_rows, diag.fold, diag.test)))
@@ -164,6 +181,17 @@ def remaining_structure(diag, p) -> list[dict]:
 
 # The loading-vs-unloading feature codes loading samples as torque + LOADING_CODE (N.m), far beyond any joint's torque.
 LOADING_CODE = 1e4
+
+
+def _split_bin(code: float, unit: str, coded: str, other: str):
+    """Words for a bin of a feature coded as value + `code` where a split holds."""
+    def words(lo: float, hi: float) -> str:
+        if lo >= code:
+            return f"{lo - code:.3g} to {hi - code:.3g} {unit}, {coded}"
+        if hi <= code:
+            return f"{lo:.3g} to {hi:.3g} {unit}, {other}"
+        return f"across the split ({coded} or {other})"
+    return words
 
 
 def _loading_bin(lo: float, hi: float) -> str:

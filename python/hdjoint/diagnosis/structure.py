@@ -93,16 +93,21 @@ def bins_of(feature, residual, bins: int = 20, circular_period: float | None = N
     return np.clip(np.searchsorted(edges, x, side="right") - 1, 0, len(edges) - 2), edges, ok
 
 
-def binned_prediction(feature, residual, train, bins: int = 20, circular_period: float | None = None):
-    """Per-bin mean of the training residual, applied everywhere (NaN-free)."""
+def binned_prediction(feature, residual, train, bins: int = 20, circular_period: float | None = None,
+                      modulator=None):
+    """Per-bin mean of the training residual, applied everywhere (NaN-free);
+    with a `modulator` m, per-bin least-squares coefficients of the residual
+    on m, applied as coefficient times m (structure that scales with m)."""
     index, edges, ok = bins_of(feature, residual, bins, circular_period)
     if index is None:
         return np.zeros_like(residual), edges, np.zeros(1)
+    m = np.ones_like(residual) if modulator is None else modulator
     use = ok & train
-    sums = np.bincount(index[use], weights=residual[use], minlength=len(edges) - 1)
+    sums = np.bincount(index[use], weights=residual[use] * m[use], minlength=len(edges) - 1)
+    weights = np.bincount(index[use], weights=m[use] * m[use], minlength=len(edges) - 1)
     counts = np.bincount(index[use], minlength=len(edges) - 1)
-    means = np.where(counts > 20, sums / np.maximum(counts, 1), 0.0)
-    return means[index], edges, means
+    means = np.where((counts > 20) & (weights > 0), sums / np.where(weights > 0, weights, 1.0), 0.0)
+    return means[index] * m, edges, means
 
 
 @dataclass
@@ -113,21 +118,31 @@ class Structure:
     edges: np.ndarray
     means: np.ndarray
     bin_index: np.ndarray | None = None  # each sample's bin (the regressors of the binned prediction)
+    modulator: np.ndarray | None = None  # what each bin's coefficient multiplies (None: 1)
 
 
-def scan(residual, features: dict, fold, train, test) -> list[Structure]:
+def scan(residual, features: dict, fold, train, test, through=None) -> list[Structure]:
     """Binned-mean scans over named features; returns them sorted by held-out gain.
     `features` maps name -> (values, circular period or None, unit), or with
-    a fourth item that words a bin (lo, hi) for a feature whose values are coded."""
+    a fourth item that words a bin (lo, hi) for a feature whose values are
+    coded (None: the plain words), and a fifth, a modulator the bins' values
+    multiply (binned_prediction).
+    `through`: the filter the residual was seen through, which each prediction
+    passes too (a ripple in the motor angle at speed reaches a smoothed channel
+    attenuated: predicted at full size, it makes fast folds worse)."""
     found = []
     centred = residual - np.nanmean(residual[train])
-    for name, (values, period, unit, *words) in features.items():
-        pred, edges, means = binned_prediction(values, centred, train, circular_period=period)
+    for name, (values, period, unit, *more) in features.items():
+        words, modulator = (more + [None, None])[:2]
+        pred, edges, means = binned_prediction(values, centred, train, circular_period=period, modulator=modulator)
+        if through is not None:
+            pred = through(pred)
         gain = held_out_gain(centred, pred, fold, test)
         k = int(np.argmax(np.abs(means))) if len(means) else 0
-        bin_text = words[0] if words else (lambda lo, hi: f"{lo:.3g} to {hi:.3g} {unit}")
+        bin_text = words or (lambda lo, hi: f"{lo:.3g} to {hi:.3g} {unit}")
         where = bin_text(edges[k], edges[k + 1]) if len(edges) > k + 1 else ""
-        found.append(Structure(name, gain, where, edges, means, bins_of(values, centred, circular_period=period)[0]))
+        found.append(Structure(name, gain, where, edges, means, bins_of(values, centred, circular_period=period)[0],
+                               modulator))
     return sorted(found, key=lambda s: -s.gain.gain)
 
 
