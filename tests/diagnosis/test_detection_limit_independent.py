@@ -28,7 +28,7 @@ def test_a_compliance_too_small_to_show_is_said_and_one_past_the_limit_is_named(
     # A stiffer bearing twists less: the truth's Kw lies beyond the limit, hidden.
     assert 1.0 < limit["limit"] < joint.truth["Kw"]
     said = next(x for x in doc["cannot_tell"] if x.get("effect") == "wave_generator_compliance")
-    assert "would not show" in said["why"] and f"Kw = {limit['limit']:.3g}" in said["why"]
+    assert "would not show" in said["why"] and f"Kw of {limit['limit']:.3g} N.m/rad" in said["why"]
     assert said["record"] and "wave_generator_compliance" in doc["verdict_note"]
 
     joint.truth["Kw"] = limit["limit"] / 2.0  # twice the compliance the recording would just show
