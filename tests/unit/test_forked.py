@@ -81,10 +81,11 @@ def test_a_daemonic_process_runs_its_pieces_itself():
     assert can is False and out == [1, 2, 3]
 
 
-def _lent_jacobian():
+def _lent_jacobian(seconds_per_call: float = 0.03):
     """A least-squares fit whose residual function closes over unpicklable
-    state, with its Jacobian's columns by forked children and one after the
+    state (and takes `seconds_per_call`), with its Jacobian's columns by forked children and one after the
     other: for each, (solution, Jacobian, the other processes that evaluated it)."""
+    import time
     import numpy as np
     from scipy.optimize import least_squares
     state = {"lock": threading.Lock(), "t": np.linspace(0.0, 1.0, 200)}
@@ -92,6 +93,7 @@ def _lent_jacobian():
 
     def residuals(z):
         evaluated_by.put(os.getpid())
+        time.sleep(seconds_per_call)
         t = state["t"]
         return z[0] * np.exp(-z[1] * t) + z[2] * t - (2.0 * np.exp(-3.0 * t) + 0.5 * t)
 
@@ -112,6 +114,14 @@ def test_a_fits_jacobian_by_forked_children_is_the_one_after_the_other():
     (x_side, jac_side, children), (x_serial, jac_serial, none) = out
     assert len(children) == 2 and not none
     assert x_side == x_serial and jac_side == jac_serial  # bit for bit
+
+
+def test_a_quick_jacobian_is_not_worth_forking_for():
+    # Three columns of a millisecond: a pool would cost more than it saves.
+    status, _, out = _in_single_threaded_process(lambda: _lent_jacobian(seconds_per_call=0.001))
+    assert status == "ok"
+    (_, _, children), _ = out
+    assert children == []
 
 
 def test_no_lending_while_lent_nor_where_forking_is_unsafe():

@@ -17,6 +17,7 @@ import multiprocessing
 import os
 import signal
 import threading
+import time
 from contextlib import contextmanager
 from typing import Callable, Iterator, TypeVar
 
@@ -70,20 +71,51 @@ class Inherited:
         return _function(*args)
 
 
+# A map that took this long one after the other is worth forking children for
+# (a pool starts in tens of milliseconds; a fit's Jacobian on a recording
+# against a torque sensor takes about 20 ms, without one over 100 ms).
+WORTH_FORKING_S = 0.05
+
+
+class _ForkedWhenWorthIt:
+    """A map-like that runs its first map one after the other and, if that
+    took WORTH_FORKING_S or longer, every later one in forked children."""
+
+    def __init__(self, workers: int):
+        self.workers, self.pool, self.first_took = workers, None, None
+
+    def __call__(self, f: Callable, arguments) -> list:
+        if self.pool is None and (self.first_took is None or self.first_took < WORTH_FORKING_S):
+            started = time.perf_counter()
+            out = [f(a) for a in arguments]
+            self.first_took = self.first_took if self.first_took is not None else time.perf_counter() - started
+            return out
+        if self.pool is None:
+            self.pool = multiprocessing.get_context("fork").Pool(self.workers, initializer=_quiet_on_ctrl_c)
+        return self.pool.map(f, list(arguments), chunksize=1)
+
+    def close(self) -> None:
+        if self.pool is not None:
+            self.pool.terminate()
+            self.pool.join()
+
+
 @contextmanager
 def forked_map(function: Callable, workers: int | None = None) -> Iterator[tuple[Callable, Callable | None]]:
     """(f, map): f evaluates `function` and pickles, map(f, arguments) is a
     map-like over up to `workers` forked children that inherited `function`
-    (None: one per available core). Where forking is not safe, or already
-    lent (one at a time), f is `function` and map is None: one after the other."""
+    (None: one per available core) once a map proves worth it. Where forking
+    is not safe, or already lent (one at a time), f is `function` and map is
+    None: one after the other."""
     global _function
     workers = available_cores() if workers is None else workers
     if workers <= 1 or not can_fork() or _function is not None:
         yield function, None
         return
     _function = function
+    columns = _ForkedWhenWorthIt(workers)
     try:
-        with multiprocessing.get_context("fork").Pool(workers, initializer=_quiet_on_ctrl_c) as pool:
-            yield Inherited(), lambda f, arguments: pool.map(f, arguments, chunksize=1)
+        yield Inherited(), columns
     finally:
+        columns.close()
         _function = None
