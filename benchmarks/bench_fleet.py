@@ -123,7 +123,7 @@ def main():
     args = ap.parse_args()
     root, pmap = fleet(args.days, args.joints)
     recordings = spread(sorted(str(p) for p in (root / "logs").rglob("*.csv")), args.speedup)
-    lines = [f"# Fleet benchmark", "",
+    lines = ["# Fleet benchmark", "",
              stamp.generated_by(f"python benchmarks/bench_fleet.py --command {args.command}"), "",
              f"## Throughput: `fleet {args.command}`, {len(recordings)} recordings of 20 s", "",
              "| workers | recordings/min | wall (s) | mean task (s) | fleet bookkeeping per reused recording (s) "
