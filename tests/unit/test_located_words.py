@@ -3,7 +3,7 @@ the loading-vs-unloading scan codes loading samples as torque + 1e4 N.m, and
 an unexplained entry read "largest at 1e+04 to 1e+04 N.m" (issue 38)."""
 import numpy as np
 
-from hdjoint.diagnosis.findings import LOADING_CODE, _loading_bin
+from hdjoint.diagnosis.findings import LOADING_CODE, _direction_bin, _loading_bin
 from hdjoint.diagnosis.structure import scan
 
 
@@ -25,3 +25,9 @@ def test_the_loading_scan_says_torque_and_direction_not_its_code():
 def test_a_bin_across_the_code_is_said_so():
     assert _loading_bin(-2.0, LOADING_CODE + 1.0) == "torques across loading and unloading"
     assert _loading_bin(-2.0, 1.0) == "-2 to 1 N.m while unloading"
+
+
+def test_a_negative_torque_while_moving_forward_is_said_as_forward():
+    # Coded as torque + 1e4, it lies below the code but far above any torque.
+    assert _direction_bin(LOADING_CODE - 3.0, LOADING_CODE - 1.0) == "-3 to -1 N.m, moving forward"
+    assert _direction_bin(-3.0, 2.0) == "-3 to 2 N.m, moving back"

@@ -143,10 +143,10 @@ def remaining_structure(diag, p) -> list[dict]:
         # Each of these splits a feature in two: structure whose sign flips with the
         # direction (friction that ripples with the angle or grows with the load)
         # averages out of the feature alone.
-        "torque level, by direction of motion": (reference + LOADING_CODE * forward, None, "N.m",
-                                                 _split_bin(LOADING_CODE, "N.m", "moving forward", "moving back")),
+        "torque level, by direction of motion": (reference + LOADING_CODE * forward, None, "N.m", _direction_bin),
         "motor angle (one revolution), by direction of motion": (
-            angle + 2 * np.pi * forward, 4 * np.pi, "rad", _split_bin(2 * np.pi, "rad", "moving forward", "moving back")),
+            angle + 2 * np.pi * forward, 4 * np.pi, "rad",
+            _split_bin(2 * np.pi, 2 * np.pi, "rad", ", moving forward", ", moving back", "across both directions")),
         # A ripple whose size follows the torque: each bin's value is per N.m of it.
         "motor angle (one revolution), in proportion to the torque": (
             angle, 2 * np.pi, "rad", lambda lo, hi: f"{lo:.3g} to {hi:.3g} rad, growing with the torque",
@@ -179,28 +179,28 @@ def remaining_structure(diag, p) -> list[dict]:
     return found
 
 
-# The loading-vs-unloading feature codes loading samples as torque + LOADING_CODE (N.m), far beyond any joint's torque.
+# The torque features split in two code one side as torque + LOADING_CODE (N.m), far beyond any joint's torque.
 LOADING_CODE = 1e4
 
 
-def _split_bin(code: float, unit: str, coded: str, other: str):
-    """Words for a bin of a feature coded as value + `code` where a split holds."""
+def _split_bin(code: float, split_at: float, unit: str, coded: str, other: str, across: str):
+    """Words for a bin (lo, hi) of a feature coded as value + `code` on one
+    side of a split: coded values lie at or above `split_at`, the others below
+    (an angle in [0, 2 pi) splits at its code; a torque of either sign,
+    halfway to it)."""
     def words(lo: float, hi: float) -> str:
-        if lo >= code:
-            return f"{lo - code:.3g} to {hi - code:.3g} {unit}, {coded}"
-        if hi <= code:
-            return f"{lo:.3g} to {hi:.3g} {unit}, {other}"
-        return f"across the split ({coded} or {other})"
+        if lo >= split_at:
+            return f"{lo - code:.3g} to {hi - code:.3g} {unit}{coded}"
+        if hi <= split_at:
+            return f"{lo:.3g} to {hi:.3g} {unit}{other}"
+        return across
     return words
 
 
-def _loading_bin(lo: float, hi: float) -> str:
-    """A bin of the coded loading feature in words: its torque and whether loading."""
-    if lo >= LOADING_CODE / 2:
-        return f"{lo - LOADING_CODE:.3g} to {hi - LOADING_CODE:.3g} N.m while loading"
-    if hi <= LOADING_CODE / 2:
-        return f"{lo:.3g} to {hi:.3g} N.m while unloading"
-    return "torques across loading and unloading"
+_loading_bin = _split_bin(LOADING_CODE, LOADING_CODE / 2, "N.m", " while loading", " while unloading",
+                          "torques across loading and unloading")
+_direction_bin = _split_bin(LOADING_CODE, LOADING_CODE / 2, "N.m", ", moving forward", ", moving back",
+                            "torques across both directions")
 
 
 def estimator_comparison(diag, corrected) -> dict | None:
