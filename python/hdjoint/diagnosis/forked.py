@@ -48,6 +48,10 @@ def _quiet_on_ctrl_c() -> None:
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
+def _pool(workers: int):
+    return multiprocessing.get_context("fork").Pool(workers, initializer=_quiet_on_ctrl_c)
+
+
 def map_forked(piece: Callable[[int], T], count: int, workers: int | None = None) -> list[T]:
     """[piece(0), ..., piece(count - 1)], computed by up to `workers` forked
     processes (None: one per available core). Results come back pickled."""
@@ -57,7 +61,7 @@ def map_forked(piece: Callable[[int], T], count: int, workers: int | None = None
         return [piece(i) for i in range(count)]
     _piece = piece
     try:
-        with multiprocessing.get_context("fork").Pool(workers, initializer=_quiet_on_ctrl_c) as pool:
+        with _pool(workers) as pool:
             return pool.map(_run, range(count), chunksize=1)
     finally:
         _piece = None
@@ -85,13 +89,15 @@ class _ForkedWhenWorthIt:
         self.workers, self.pool, self.first_took = workers, None, None
 
     def __call__(self, f: Callable, arguments) -> list:
-        if self.pool is None and (self.first_took is None or self.first_took < WORTH_FORKING_S):
+        if self.first_took is None:
             started = time.perf_counter()
             out = [f(a) for a in arguments]
-            self.first_took = self.first_took if self.first_took is not None else time.perf_counter() - started
+            self.first_took = time.perf_counter() - started
             return out
+        if self.first_took < WORTH_FORKING_S:
+            return [f(a) for a in arguments]
         if self.pool is None:
-            self.pool = multiprocessing.get_context("fork").Pool(self.workers, initializer=_quiet_on_ctrl_c)
+            self.pool = _pool(self.workers)
         return self.pool.map(f, list(arguments), chunksize=1)
 
     def close(self) -> None:
