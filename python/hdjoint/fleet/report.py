@@ -99,7 +99,8 @@ def _joint_figure(joint: str, joint_rows: list[dict], drift) -> str:
     if not ok or not shown:
         return ""
     days = trend._days([r.get("date") for r in ok])
-    labels = {tr.quantity: f"{tr.quantity}" + (f" ({_quantity(tr.quantity)[1]})" if _quantity(tr.quantity)[1] else "")
+    units = {tr.quantity: _quantity(tr.quantity)[1] for tr in drift.trends}
+    labels = {tr.quantity: tr.quantity + (f" ({units[tr.quantity]})" if units[tr.quantity] else "")
               + f", p = {tr.p_value:.2g}" for tr in drift.trends}
     cols = min(3, len(shown))
     nrows = math.ceil(len(shown) / cols)
