@@ -21,6 +21,7 @@ from pathlib import Path
 
 from hdjoint.io import parameters
 from hdjoint_truth.cases import OPEN_LIBRARY_CASES, draw, record
+from hdjoint_truth.outside import RIPPLE_ORDER
 
 import diagnosis_independent as independent
 import stamp
@@ -29,11 +30,12 @@ RESULTS = independent.ROOT / "docs" / "results" / "open_library_cases.jsonl"
 TABLE = RESULTS.with_suffix(".md")
 DURATION = 30.0
 KEY = ("case", "seed", "sensor")
-# The open library's features that describe each planted law (the truth's
-# order is hdjoint_truth.outside.RIPPLE_ORDER); the control plants none.
+# The open library's features that describe each planted law, at the
+# truth's ripple order; the control plants none.
+_ORDER = f"{RIPPLE_ORDER:g}*theta_m"
 MATCHES = {
-    "friction_ripple": ("sign(omega_m)*cos(2*theta_m)", "sign(omega_m)*sin(2*theta_m)"),
-    "kinematic_torque": ("tau*cos(2*theta_m)", "tau*sin(2*theta_m)"),
+    "friction_ripple": (f"sign(omega_m)*cos({_ORDER})", f"sign(omega_m)*sin({_ORDER})"),
+    "kinematic_torque": (f"tau*cos({_ORDER})", f"tau*sin({_ORDER})"),
     "friction_load": ("sign(omega_m)*|tau|",),
     "lugre": (),
 }
