@@ -9,6 +9,8 @@ angle alone (it flips with the direction), and at speed reaches the motor
 channel through its smoothing filter; a ripple that grows with the torque
 averages out of a scan over the angle when the torque changes sign.
 findings.remaining_structure scans both."""
+from dataclasses import replace
+
 import pytest
 
 from hdjoint.diagnosis.pipeline import diagnose
@@ -52,3 +54,16 @@ def test_a_lugre_friction_control_is_consistent():
     assert joint.form.friction == "lugre"
     assert doc["verdict"] == "consistent", (doc["findings"], doc["unexplained"])
     assert "proposed_terms" not in doc
+
+
+def test_a_catch_all_whose_joint_refit_is_not_physical_is_refused():
+    """Friction growing with the load, without the torque sensor: thermal drift
+    passed on its own fit, but settling with the calibration turned it into a
+    step of Kt with a 0.1 s time constant. Each accepted effect is judged
+    again on the joint refit (select._accept), so this is no finding."""
+    joint = draw(next(c for c in OPEN_LIBRARY_CASES if c.outside == "friction_load"), 0, 30.0)
+    _, doc = diagnose(replace(record(joint, 0), tau_sensor=None), joint.nominal, workers=1)
+    assert "thermal_drift" not in [f["effect"] for f in doc["findings"]], doc["findings"]
+    drift = [h for r in doc["hypotheses_tested"] for h in r if h["effect"] == "thermal_drift"]
+    assert any("refitted with the joint's calibration" in h.get("degenerate", "") for h in drift), drift
+    assert doc["verdict"] != "consistent"

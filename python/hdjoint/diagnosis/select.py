@@ -42,6 +42,27 @@ def _record(h: Hypothesis) -> dict:
             **h.pooled_evidence()}
 
 
+def _accept(best: Hypothesis, others: list[Hypothesis], objective, added_names: list[str]):
+    """The finding for an accepted hypothesis and the joint refit with it, or
+    None when that refit is not physical: calibration and the accepted terms
+    settle together, and may carry the new term somewhere its own fit was
+    refused from (a warm-up turned into a step). Such a finding is a
+    catch-all; the hypothesis is marked degenerate and the next one is tried."""
+    finding = finding_for(best, others)
+    finding = best.effect.settle(finding, objective)  # the effect's own special case, if any
+    # Terms seen on the encoders' torsion stay as fitted there: the torque channels are blind to them.
+    refitted = [] if best.seen_on else finding.fitted
+    names = objective.calibrated_names + added_names + refitted
+    refit = objective.fit(best.params_after, list(dict.fromkeys(names)), objective.channels)
+    reason = best.effect.degenerate(refit.params, objective.recording_scale(refit.params))
+    if reason is not None:
+        best.degenerate = f"refitted with the joint's calibration, {reason}"
+        objective.say(f"{best.effect.id} refused: {best.degenerate}")
+        return None
+    finding.params_after = refit.params
+    return finding, refit, refitted
+
+
 def select(search: HypothesisSearch, calibration: Calibration) -> Selection:
     objective = search.objective
     p, last_fit = calibration.params, calibration.fit
@@ -61,23 +82,19 @@ def select(search: HypothesisSearch, calibration: Calibration) -> Selection:
             h.p_value = adjusted
         tried.sort(key=lambda h: -h.gain.gain)
         last_round = tried
-        tested.append([_record(h) for h in tried])
         accepted = [h for h in tried if h.accepted()]
-        if not accepted:
+        chosen = None
+        for best in accepted:
+            chosen = _accept(best, [h for h in tried if h is not best], objective, added_names)
+            if chosen is not None:
+                break
+        tested.append([_record(h) for h in tried])
+        if chosen is None:
             unconfirmed = [h for h in tried if h.unconfirmed()]
             break
-        best = accepted[0]
-        others = [h for h in tried if h is not best]
-        finding = finding_for(best, others)
-        finding = best.effect.settle(finding, objective)  # the effect's own special case, if any
+        finding, refit, refitted = chosen
         objective.say(f"found {finding.effect.id} ({finding.kind}): held-out gain {100 * best.gain.gain:.1f} %, "
                       f"p = {best.p_value:.2g}")
-        # Refit everything so calibration and the new terms settle together (terms seen on
-        # the encoders' torsion stay as fitted there: the torque channels are blind to them).
-        refitted = [] if best.seen_on else finding.fitted
-        names = objective.calibrated_names + added_names + refitted
-        refit = objective.fit(best.params_after, list(dict.fromkeys(names)), objective.channels)
-        finding.params_after = refit.params
         findings.append(finding)
         added_names = list(dict.fromkeys(added_names + refitted))
         last_fit = refit
