@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "friction.h"
+#include "hysteresis.h"
 #include "transmission.h"
 
 namespace hdjoint {
@@ -34,6 +35,7 @@ JointTorque joint_state_torque(const JointState& x, const JointInput& in, const 
         const double tau_w = (1.0 - p.wg_load) * p.Kt * in.i_m + p.wg_load * c.tau / p.N;
         k /= 1.0 + k * p.wg_load / p.N * wave_generator_compliance(tau_w, p);
     }
+    k += in.dz;
     double e_m = 0.0, e_l = 0.0;
     kinematic_error_gradient(theta_m, theta_l, p, &e_m, &e_l);
     t.tau = c.tau + in.z + x(joint_state::kTorqueError);
@@ -44,7 +46,8 @@ JointTorque joint_state_torque(const JointState& x, const JointInput& in, const 
 }
 
 JointTorque JointSystemModel::torque(const State& x, const Control& u) const {
-    if (!(cached_ && x == cached_x_ && u.i_m == cached_u_.i_m && u.z == cached_u_.z && u.t == cached_u_.t)) {
+    if (!(cached_ && x == cached_x_ && u.i_m == cached_u_.i_m && u.z == cached_u_.z && u.t == cached_u_.t &&
+          u.dz == cached_u_.dz)) {
         cached_torque_ = joint_state_torque(x, u, p);
         cached_x_ = x;
         cached_u_ = u;
@@ -306,6 +309,7 @@ FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointI
     if (finite(in)) current_change_ = std::fabs(in.i_m - previous_.i_m);
     samples_held_ = 0.0;
     previous_ = finite(in) ? in : accepted_;
+    follow_hysteresis(!record_.predicted);
     record_.input = previous_;
 
     // No torque explains this state: the last one is kept, and said so.
@@ -315,6 +319,22 @@ FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointI
         load_noise_scale_ += adapt_weight_ * (0.5 * update.nis - load_noise_scale_);
     if (!finite(in)) status = std::max(status, FilterStatus::SampleRejected);
     return std::max(status, update.status);
+}
+
+void JointStateFilter::follow_hysteresis(bool first) {
+    using namespace joint_state;
+    if (!(p_.hys_H > 0.0)) return;
+    const JointState& x = kalman_.state();
+    const double theta_l = x(kThetaL);
+    // The plant's law: the torsion less the kinematic error's (geometry, no strain).
+    const double y = x(kDelta) - kinematic_error(p_.N * (theta_l + x(kDelta)), theta_l, p_);
+    if (!first) {
+        hysteresis_ = dahl_update(hysteresis_, y - torsion_, p_.hys_H, p_.hys_sigma);
+        if (y != torsion_) direction_ = y > torsion_ ? 1.0 : -1.0;
+    }
+    torsion_ = y;
+    previous_.z = hysteresis_;
+    previous_.dz = p_.hys_sigma * (1.0 - direction_ * hysteresis_ / p_.hys_H);
 }
 
 bool JointStateFilter::publish_state() {
@@ -345,47 +365,51 @@ void JointStateFilter::predict_without_reading(const JointInput& in) {
     record_.x = kalman_.state();
     record_.P = kalman_.covariance();
     previous_ = finite(in) ? in : accepted_;
+    follow_hysteresis(false);
     record_.input = previous_;
     publish_state();
     out_.nis = 0.0;  // no innovation
 }
 
-// [started, x (kJointStates), P (kJointStates^2, column-major), previous and accepted input (i_m, z, t each),
-//  outputs (tau, tau_std, load, nis), load noise scale, readings rejected, current change, samples held,
-//  last readings (theta_m, theta_l), their repeats]
+// [started, x (kJointStates), P (kJointStates^2, column-major), previous and accepted input (i_m, z, t, dz
+//  each), outputs (tau, tau_std, load, nis), load noise scale, readings rejected, current change, samples held,
+//  last readings (theta_m, theta_l), their repeats, hysteresis torque, its torsion and direction]
 void JointStateFilter::save(std::vector<double>* out) const {
     out->push_back(started_ ? 1.0 : 0.0);
     const JointState& x = kalman_.state();
     const JointCovariance& P = kalman_.covariance();
     out->insert(out->end(), x.data(), x.data() + kJointStates);
     out->insert(out->end(), P.data(), P.data() + kJointStates * kJointStates);
-    out->insert(out->end(), {previous_.i_m, previous_.z, previous_.t, accepted_.i_m, accepted_.z, accepted_.t,
-                             out_.tau, out_.tau_std, out_.load, out_.nis, load_noise_scale_,
-                             readings_rejected_ ? 1.0 : 0.0, current_change_, samples_held_, last_m_, last_l_,
-                             repeats_m_, repeats_l_});
+    out->insert(out->end(), {previous_.i_m, previous_.z, previous_.t, previous_.dz, accepted_.i_m, accepted_.z,
+                             accepted_.t, accepted_.dz, out_.tau, out_.tau_std, out_.load, out_.nis,
+                             load_noise_scale_, readings_rejected_ ? 1.0 : 0.0, current_change_, samples_held_,
+                             last_m_, last_l_, repeats_m_, repeats_l_, hysteresis_, torsion_, direction_});
 }
 
 bool JointStateFilter::load(const std::vector<double>& in, std::size_t* cursor) {
     if (in.size() < *cursor + kSavedSize) return false;
     const double* d = in.data() + *cursor;
     const double* r = d + 1 + kJointStates + kJointStates * kJointStates;
-    if ((d[0] != 0.0 && d[0] != 1.0) || (r[11] != 0.0 && r[11] != 1.0) || !(r[12] >= 0.0) || !(r[13] >= 0.0) ||
-        !(r[16] >= 0.0) || !(r[17] >= 0.0))
+    if ((d[0] != 0.0 && d[0] != 1.0) || (r[13] != 0.0 && r[13] != 1.0) || !(r[14] >= 0.0) || !(r[15] >= 0.0) ||
+        !(r[18] >= 0.0) || !(r[19] >= 0.0) || !(r[22] == 0.0 || std::fabs(r[22]) == 1.0))
         return false;
     started_ = d[0] == 1.0;
     std::copy(d + 1, d + 1 + kJointStates, kalman_.state().data());
     std::copy(d + 1 + kJointStates, d + 1 + kJointStates + kJointStates * kJointStates, kalman_.covariance().data());
-    previous_ = {r[0], r[1], r[2]};
-    accepted_ = {r[3], r[4], r[5]};
-    out_ = {r[6], r[7], r[8], r[9]};
-    load_noise_scale_ = r[10];
-    readings_rejected_ = r[11] == 1.0;
-    current_change_ = r[12];
-    samples_held_ = r[13];
-    last_m_ = r[14];
-    last_l_ = r[15];
-    repeats_m_ = r[16];
-    repeats_l_ = r[17];
+    previous_ = {r[0], r[1], r[2], r[3]};
+    accepted_ = {r[4], r[5], r[6], r[7]};
+    out_ = {r[8], r[9], r[10], r[11]};
+    load_noise_scale_ = r[12];
+    readings_rejected_ = r[13] == 1.0;
+    current_change_ = r[14];
+    samples_held_ = r[15];
+    last_m_ = r[16];
+    last_l_ = r[17];
+    repeats_m_ = r[18];
+    repeats_l_ = r[19];
+    hysteresis_ = r[20];
+    torsion_ = r[21];
+    direction_ = r[22];
     *cursor += kSavedSize;
     return true;
 }
@@ -399,6 +423,7 @@ void flatten_record(const JointFilterRecord& r, double* out) {
     *out++ = r.input.i_m;
     *out++ = r.input.z;
     *out++ = r.input.t;
+    *out++ = r.input.dz;
     *out = r.predicted ? 1.0 : 0.0;
 }
 
@@ -413,8 +438,8 @@ JointFilterRecord unflatten_record(const double* in) {
     take(r.F);
     take(r.x);
     take(r.P);
-    r.input = {in[0], in[1], in[2]};
-    r.predicted = in[3] == 1.0;
+    r.input = {in[0], in[1], in[2], in[3]};
+    r.predicted = in[4] == 1.0;
     return r;
 }
 

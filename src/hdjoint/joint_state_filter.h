@@ -27,7 +27,7 @@
 //   d(w)/dt = r, d(r)/dt = noise, d(g)/dt = 0, d(e)/dt = noise
 // Dynamics, with tau(x) the transmitted torque of the corrected compliance
 // chain (eq. 3-8 with kinematic error, wave generator, backlash, the
-// hysteresis torque z of the compliance model):
+// Dahl hysteresis torque z of the filter's own torsion, follow_hysteresis):
 //   Jl*(1 + g)*d(omega_l)/dt = tau - Bl*omega_l - mgl*sin(theta_l) - w
 //   N*Jm*d(omega_l + nu)/dt  = Kt*i_m + cogging - tau_fm(omega_m) - Bm*omega_m - tau/N
 // discretised by the linearly implicit trapezoidal rule (A-stable, keeps the
@@ -66,15 +66,18 @@ using JointState = Vector<kJointStates>;
 using JointCovariance = Matrix<kJointStates>;
 
 // What the dynamics hold over a sample: the current, the hysteresis torque
-// of the compliance model and the time (friction drift).
+// z and its slope dz by the elastic torsion, and the time (friction drift).
+// The filter replaces z and dz by the Dahl law (hys_H) of its own torsion
+// (JointStateFilter::follow_hysteresis).
 struct JointInput {
     double i_m = 0.0;
     double z = 0.0;
     double t = 0.0;
+    double dz = 0.0;  // N.m/rad: the hysteresis stiffens the transmission in the direction of motion
 };
 
-// The transmitted torque of a state (tau(x) + e) and its gradient by the state
-// (by e it is 1).
+// The transmitted torque of a state (tau(x) + z + e) and its gradient by the
+// state (by e it is 1; the hysteresis adds its slope dz to the stiffness).
 struct JointTorque {
     double tau = 0.0;
     double d_theta_l = 0.0;  // d tau / d theta_l
@@ -222,8 +225,8 @@ public:
     const JointCovariance& covariance() const { return kalman_.covariance(); }
     bool started() const { return started_; }
 
-    // Flat state: 1 + 8 + 64 + 3 + 3 + 4 + 2 + 2 + 4 values.
-    static constexpr std::size_t kSavedSize = 91;
+    // Flat state: 1 + 8 + 64 + 4 + 4 + 4 + 2 + 2 + 4 + 3 values.
+    static constexpr std::size_t kSavedSize = 96;
 
     // The variance of a torque at a state of covariance P (first order).
     static double torque_variance(const JointTorque& T, const JointCovariance& P);
@@ -262,6 +265,14 @@ private:
     Matrix<2> timing_covariance() const;
     double adapt_weight_ = 0.0;  // Ts / jsf_load_adapt_time (0: off)
     JointCovariance process_noise() const;
+    // The Dahl hysteresis torque (hys_H, hys_sigma) of the posterior's elastic
+    // torsion and its slope, held in previous_ over the next sample. The
+    // compliance model's z follows the readings, whose count can be wider than
+    // the whole loop: there the filter's dynamics would miss the stiffening.
+    void follow_hysteresis(bool first);
+    double hysteresis_ = 0.0;  // z, N.m
+    double torsion_ = 0.0;     // the elastic torsion it was last updated at, rad
+    double direction_ = 0.0;   // the sign of the torsion's last move (0 before any)
     // The NIS gate for readings z at the predicted state: kOutlierGate, or
     // none when the innovation is below kOutlierAngle.
     double gate(const Vector<2>& z) const;
@@ -271,9 +282,9 @@ private:
 };
 
 // A record as flat doubles (x_prior, P_prior, F, x, P column-major, the
-// input's i_m, z, t, predicted as 0/1), for a smoother whose records wait on
-// disk between its forward and backward pass.
-constexpr std::size_t kRecordValues = 2 * kJointStates + 3 * kJointStates * kJointStates + 3 + 1;
+// input's i_m, z, t, dz, predicted as 0/1), for a smoother whose records wait
+// on disk between its forward and backward pass.
+constexpr std::size_t kRecordValues = 2 * kJointStates + 3 * kJointStates * kJointStates + 4 + 1;
 void flatten_record(const JointFilterRecord& r, double* out);
 JointFilterRecord unflatten_record(const double* in);
 
