@@ -231,13 +231,35 @@ def hysteresis_torque(prep: Prepared, p: dict, sharp: bool = False) -> np.ndarra
     small fraction of an encoder count, so it flips with the torsional
     vibration: a modelled loop driven through the 6 ms smoothing, which
     takes that vibration away, does not follow the joint's loop; driven
-    through the transmission's filter, it does."""
+    through the transmission's filter, it does. Against a sensor, the
+    torsion's slow part is the link's torque's (_slow_torsion_from_link):
+    where the torque spans a count or two, the encoders' torsion reverses
+    with their quantisation and the kinematic error's residue, not with
+    the load, and the loop would flip with them."""
     native = parameters.for_estimator(dict(p, i_delay=0.0))
     current, theta_m, theta_l = _compliance_inputs(prep, p, sharp)
     if not sharp:
         theta_m, theta_l = prep.smoothed("theta_m", theta_m), prep.smoothed("theta_l", theta_l)
+    else:
+        theta_l = theta_l + _slow_torsion_from_link(prep, p)
     return prep.per_window(lambda i, tm, tl: _core.compliance(native, i, tm, tl)["hysteresis_torque"],
                            current, theta_m, theta_l)
+
+
+def _slow_torsion_from_link(prep: Prepared, p: dict) -> np.ndarray:
+    """What to add to the link angle so the compliance model's torsion
+    takes its part within the kinematics' smoothing from the link's
+    torque (tau_L, seen through that filter) instead of the encoders:
+    the kinematics' smoothing of the torsion less the torsion tau_L twists
+    the transmission by, read off the compliance law on this recording
+    (torque against torsion, made monotone)."""
+    torsion = torsion_less_kinematic(prep, p)
+    torque = _compliance_torque(prep, dict(p, hys_H=0.0))
+    ok = np.isfinite(torsion) & np.isfinite(torque)
+    order = np.argsort(torsion[ok])
+    law = np.maximum.accumulate(torque[ok][order])
+    link_torsion = np.interp(np.nan_to_num(tau_link(prep, p)), law, torsion[ok][order])
+    return prep.kin.smooth(np.nan_to_num(torsion)) - link_torsion
 
 
 def _compliance_inputs(prep: Prepared, p: dict, sharp: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -382,4 +404,6 @@ def depends_on(part: str) -> tuple[str, ...]:
     no other parameter changes them)."""
     if part in ("motor", "link"):
         return part_parameters(part)
-    return tuple(n for n, info in parameters.table().items() if info.in_estimator()) + ("Df",)
+    # The hysteresis loop's drive reads the link's torque (_slow_torsion_from_link).
+    own = tuple(n for n, info in parameters.table().items() if info.in_estimator()) + ("Df",)
+    return own + tuple(n for n in part_parameters("link") if n not in own)
