@@ -2,7 +2,8 @@
 
   tau_T  transmission: the encoders through eq. (3)-(8) (the C++ compliance
          model, with every beyond-paper term the parameter set switches on),
-         plus the flexspline's structural damping Df
+         plus the flexspline's structural damping Df (against a sensor, the
+         hysteresis loop's slow drive is tau_L's torsion: hysteresis_torque)
   tau_M  motor: the current through eq. (2), N*(Kt*i + cogging - Jm*alpha_m
          - friction(omega_m, t)), friction and cogging by the C++ laws, each
          through the same smoothing filter as the encoders' acceleration
