@@ -224,7 +224,7 @@ def tau_transmission(prep: Prepared, p: dict[str, float], index: np.ndarray | No
     return tau + _get(p, "Df") * (rate if index is None else rate[index])
 
 
-def hysteresis_torque(prep: Prepared, p: dict, sharp: bool = False) -> np.ndarray:
+def hysteresis_torque(prep: Prepared, p: dict, sharp: bool = False, elastic: np.ndarray | None = None) -> np.ndarray:
     """The Dahl hysteresis torque of the compliance model (C++), driven by the
     torsion the compliance model sees (_compliance_inputs): through the
     transmission's filter against a torque sensor, else through the
@@ -236,30 +236,34 @@ def hysteresis_torque(prep: Prepared, p: dict, sharp: bool = False) -> np.ndarra
     torsion's slow part is the link's torque's (_slow_torsion_from_link):
     where the torque spans a count or two, the encoders' torsion reverses
     with their quantisation and the kinematic error's residue, not with
-    the load, and the loop would flip with them."""
+    the load, and the loop would flip with them. `elastic`: the compliance
+    torque without the loop through that filter, if already computed."""
     native = parameters.for_estimator(dict(p, i_delay=0.0))
     current, theta_m, theta_l = _compliance_inputs(prep, p, sharp)
     if not sharp:
         theta_m, theta_l = prep.smoothed("theta_m", theta_m), prep.smoothed("theta_l", theta_l)
     else:
-        theta_l = theta_l + _slow_torsion_from_link(prep, p)
+        if elastic is None:
+            elastic = _compliance_torque(prep, dict(p, hys_H=0.0), None, True)
+        theta_l = theta_l + _slow_torsion_from_link(prep, p, elastic)
     return prep.per_window(lambda i, tm, tl: _core.compliance(native, i, tm, tl)["hysteresis_torque"],
                            current, theta_m, theta_l)
 
 
-def _slow_torsion_from_link(prep: Prepared, p: dict) -> np.ndarray:
+def _slow_torsion_from_link(prep: Prepared, p: dict, elastic: np.ndarray) -> np.ndarray:
     """What to add to the link angle so the compliance model's torsion
     takes its part within the kinematics' smoothing from the link's
     torque (tau_L, seen through that filter) instead of the encoders:
     the kinematics' smoothing of the torsion less the torsion tau_L twists
     the transmission by, read off the compliance law on this recording
-    (torque against torsion, made monotone)."""
+    (`elastic`, the torque of the torsion through the transmission's
+    filter, against that torsion, made monotone)."""
     torsion = torsion_less_kinematic(prep, p)
-    torque = _compliance_torque(prep, dict(p, hys_H=0.0))
-    ok = np.isfinite(torsion) & np.isfinite(torque)
-    order = np.argsort(torsion[ok])
-    law = np.maximum.accumulate(torque[ok][order])
-    link_torsion = np.interp(np.nan_to_num(tau_link(prep, p)), law, torsion[ok][order])
+    seen = torsion - _geometric_torsion(prep, p)[0]  # through the transmission's filter
+    ok = np.isfinite(seen) & np.isfinite(elastic)
+    order = np.argsort(seen[ok])
+    law = np.maximum.accumulate(elastic[ok][order])
+    link_torsion = np.interp(np.nan_to_num(tau_link(prep, p)), law, seen[ok][order])
     return prep.kin.smooth(np.nan_to_num(torsion)) - link_torsion
 
 
@@ -280,8 +284,9 @@ def _compliance_torque(prep: Prepared, p: dict[str, float], index: np.ndarray | 
     """The estimator's compliance model (C++) at the encoders' instants, over
     the recording or at `index`: its current realigned by i_delay, no delay line."""
     if _get(p, "hys_H") > 0.0:
-        z = hysteresis_torque(prep, p, sharp)
-        return _compliance_torque(prep, dict(p, hys_H=0.0), index, sharp) + (z if index is None else z[index])
+        elastic = _compliance_torque(prep, dict(p, hys_H=0.0), None, sharp)
+        tau = elastic + hysteresis_torque(prep, p, sharp, elastic if sharp else None)
+        return tau if index is None else tau[index]
     current, theta_m, theta_l = _compliance_inputs(prep, p, sharp)
     native = parameters.for_estimator(dict(p, i_delay=0.0))
     if index is not None:
