@@ -2,7 +2,8 @@
 
   tau_T  transmission: the encoders through eq. (3)-(8) (the C++ compliance
          model, with every beyond-paper term the parameter set switches on),
-         plus the flexspline's structural damping Df
+         plus the flexspline's structural damping Df (against a sensor, the
+         hysteresis loop's slow drive is tau_L's torsion: hysteresis_torque)
   tau_M  motor: the current through eq. (2), N*(Kt*i + cogging - Jm*alpha_m
          - friction(omega_m, t)), friction and cogging by the C++ laws, each
          through the same smoothing filter as the encoders' acceleration
@@ -223,7 +224,7 @@ def tau_transmission(prep: Prepared, p: dict[str, float], index: np.ndarray | No
     return tau + _get(p, "Df") * (rate if index is None else rate[index])
 
 
-def hysteresis_torque(prep: Prepared, p: dict, sharp: bool = False) -> np.ndarray:
+def hysteresis_torque(prep: Prepared, p: dict, sharp: bool = False, elastic: np.ndarray | None = None) -> np.ndarray:
     """The Dahl hysteresis torque of the compliance model (C++), driven by the
     torsion the compliance model sees (_compliance_inputs): through the
     transmission's filter against a torque sensor, else through the
@@ -231,13 +232,39 @@ def hysteresis_torque(prep: Prepared, p: dict, sharp: bool = False) -> np.ndarra
     small fraction of an encoder count, so it flips with the torsional
     vibration: a modelled loop driven through the 6 ms smoothing, which
     takes that vibration away, does not follow the joint's loop; driven
-    through the transmission's filter, it does."""
+    through the transmission's filter, it does. Against a sensor, the
+    torsion's slow part is the link's torque's (_slow_torsion_from_link):
+    where the torque spans a count or two, the encoders' torsion reverses
+    with their quantisation and the kinematic error's residue, not with
+    the load, and the loop would flip with them. `elastic`: the compliance
+    torque without the loop through that filter, if already computed."""
     native = parameters.for_estimator(dict(p, i_delay=0.0))
     current, theta_m, theta_l = _compliance_inputs(prep, p, sharp)
     if not sharp:
         theta_m, theta_l = prep.smoothed("theta_m", theta_m), prep.smoothed("theta_l", theta_l)
+    else:
+        if elastic is None:
+            elastic = _compliance_torque(prep, dict(p, hys_H=0.0), None, True)
+        theta_l = theta_l + _slow_torsion_from_link(prep, p, elastic)
     return prep.per_window(lambda i, tm, tl: _core.compliance(native, i, tm, tl)["hysteresis_torque"],
                            current, theta_m, theta_l)
+
+
+def _slow_torsion_from_link(prep: Prepared, p: dict, elastic: np.ndarray) -> np.ndarray:
+    """What to add to the link angle so the compliance model's torsion
+    takes its part within the kinematics' smoothing from the link's
+    torque (tau_L, seen through that filter) instead of the encoders:
+    the kinematics' smoothing of the torsion less the torsion tau_L twists
+    the transmission by, read off the compliance law on this recording
+    (`elastic`, the torque of the torsion through the transmission's
+    filter, against that torsion, made monotone)."""
+    torsion = torsion_less_kinematic(prep, p)
+    seen = torsion - _geometric_torsion(prep, p)[0]  # through the transmission's filter
+    ok = np.isfinite(seen) & np.isfinite(elastic)
+    order = np.argsort(seen[ok])
+    law = np.maximum.accumulate(elastic[ok][order])
+    link_torsion = np.interp(np.nan_to_num(tau_link(prep, p)), law, seen[ok][order])
+    return prep.kin.smooth(np.nan_to_num(torsion)) - link_torsion
 
 
 def _compliance_inputs(prep: Prepared, p: dict, sharp: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -257,8 +284,9 @@ def _compliance_torque(prep: Prepared, p: dict[str, float], index: np.ndarray | 
     """The estimator's compliance model (C++) at the encoders' instants, over
     the recording or at `index`: its current realigned by i_delay, no delay line."""
     if _get(p, "hys_H") > 0.0:
-        z = hysteresis_torque(prep, p, sharp)
-        return _compliance_torque(prep, dict(p, hys_H=0.0), index, sharp) + (z if index is None else z[index])
+        elastic = _compliance_torque(prep, dict(p, hys_H=0.0), None, sharp)
+        tau = elastic + hysteresis_torque(prep, p, sharp, elastic if sharp else None)
+        return tau if index is None else tau[index]
     current, theta_m, theta_l = _compliance_inputs(prep, p, sharp)
     native = parameters.for_estimator(dict(p, i_delay=0.0))
     if index is not None:
@@ -382,4 +410,6 @@ def depends_on(part: str) -> tuple[str, ...]:
     no other parameter changes them)."""
     if part in ("motor", "link"):
         return part_parameters(part)
-    return tuple(n for n, info in parameters.table().items() if info.in_estimator()) + ("Df",)
+    # The hysteresis loop's drive reads the link's torque (_slow_torsion_from_link).
+    own = tuple(n for n, info in parameters.table().items() if info.in_estimator()) + ("Df",)
+    return own + tuple(n for n in part_parameters("link") if n not in own)
