@@ -208,6 +208,8 @@ def write_table(rows: list[dict], path: Path = TABLE, oracle: dict[tuple, str] |
     multi = [r for r in rows if len(r["present"]) > 1]
     first_named = lambda r: bool(r["runs"][0]["findings"]) and r["present"][0] in r["runs"][0]["findings"][0]["named"]  # noqa: E731
     named_all = lambda r: set(r["present"]) <= {e for f in r["runs"][0]["findings"] for e in f["named"]}  # noqa: E731
+    accounted = lambda r: set(r["present"]) <= ({e for f in r["runs"][0]["findings"] for e in f["named"]}  # noqa: E731
+                                              | set(r["runs"][0].get("cannot_tell", [])))
     closure_rows = [r for r in rows if r["present"] and len(r["runs"]) > 1]
     closed = lambda r: r["runs"][1]["verdict"] == "consistent"  # noqa: E731
     # Closure means something only when the first diagnosis modelled what was missing.
@@ -243,6 +245,8 @@ def write_table(rows: list[dict], path: Path = TABLE, oracle: dict[tuple, str] |
         f"{_pct(len(orders_right), len(rippled))}"
         + (f" ({len(unrecorded)} more in rows written before orders were kept)" if unrecorded else "") + " | - |",
         f"| several effects: all named | {_pct(sum(map(named_all, multi)), len(multi))} | all |",
+        f"| several effects: each one named, or said `cannot_tell` (too small for this recording) | "
+        f"{_pct(sum(map(accounted, multi)), len(multi))} | - |",
         f"| closure: corrected set `consistent` on the second recording | "
         f"{_pct(sum(map(closed, closure_rows)), len(closure_rows))}; with every effect named on the first: "
         f"{_pct(len(closed_named), len(closure_rows))} | >= {100 * GOALS['closure']:.0f} % |",
