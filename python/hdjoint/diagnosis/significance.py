@@ -24,6 +24,8 @@ benchmarks/false_alarms.py measures the false-alarm rate this gives on controls.
 """
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 from scipy.stats import norm
 
@@ -32,6 +34,21 @@ from hdjoint.diagnosis.structure import relative_fold_gains
 
 
 REPLICATES = 48
+
+
+@lru_cache(maxsize=1)
+def _rotation(n: int, seed: int) -> np.ndarray:
+    """(replicate, frequency): the random phase rotations of a residual of `n`
+    samples, the same for every null drawn with `seed` (each round's, each
+    channel's): made once, as their complex exponentials cost as much as the replicates."""
+    rng = np.random.default_rng(seed)
+    phases = rng.uniform(0.0, 2.0 * np.pi, (REPLICATES, n // 2 + 1))
+    phases[:, 0] = 0.0  # the mean stays real
+    if n % 2 == 0:
+        phases[:, -1] = 0.0  # and so does the Nyquist bin
+    rotation = np.exp(1j * phases)
+    rotation.flags.writeable = False  # shared by every null of this length
+    return rotation
 
 
 class NullNoise:
@@ -43,12 +60,7 @@ class NullNoise:
         # are 0 elsewhere, as the data's residual is (diagnosis.Evaluator.compared).
         self.compared = compared
         self.n = residuals.shape[1]
-        rng = np.random.default_rng(seed)
-        phases = rng.uniform(0.0, 2.0 * np.pi, (REPLICATES, self.spectra.shape[1]))
-        phases[:, 0] = 0.0  # the mean stays real
-        if self.n % 2 == 0:
-            phases[:, -1] = 0.0  # and so does the Nyquist bin
-        self.rotation = np.exp(1j * phases)
+        self.rotation = _rotation(self.n, seed)
         self._made: dict[tuple, np.ndarray] = {}
 
     def replicates(self, rows: list[int]) -> np.ndarray:
