@@ -10,7 +10,11 @@ inherit held) the pieces run one after the other, with the same results.
 
 A fit's finite-difference Jacobian is such a computation too: one residual
 evaluation per parameter (forked_map lends a least-squares solver a
-map-like over forked children)."""
+map-like over forked children).
+
+A Helper is forked ahead of its pieces: it prepares (imports matplotlib)
+on the core the diagnosis's serial stages leave idle, then maps pieces
+sent to it from that prepared state."""
 from __future__ import annotations
 
 import multiprocessing
@@ -125,3 +129,66 @@ def forked_map(function: Callable, workers: int | None = None) -> Iterator[tuple
     finally:
         columns.close()
         _function = None
+
+
+class Helper:
+    """A process forked ahead of its work: it runs `prepare` while this one
+    computes, then maps a function over pieces on request (map_forked, from
+    its prepared state); pieces, function and results cross pickled."""
+
+    def __init__(self, process, connection):
+        self.process, self.connection = process, connection
+
+    def map(self, function: Callable[[T], object], pieces: list[T]) -> list:
+        """[function(piece) for piece in pieces], by the helper (from here, should it have ended)."""
+        try:
+            self.connection.send((function, pieces))
+            ok, value = self.connection.recv()
+        except (EOFError, OSError):
+            return map_forked(lambda i: function(pieces[i]), len(pieces))
+        if not ok:
+            raise RuntimeError(value)
+        return value
+
+    @staticmethod
+    def _serve(connection, prepare: Callable[[], None]) -> None:
+        _quiet_on_ctrl_c()
+        prepare()
+        while True:
+            try:
+                request = connection.recv()
+            except EOFError:  # the parent is gone
+                return
+            if request is None:
+                return
+            function, pieces = request
+            try:
+                connection.send((True, map_forked(lambda i: function(pieces[i]), len(pieces))))
+            except Exception as e:  # told to the parent, which raises it
+                connection.send((False, f"{type(e).__name__}: {e}"))
+
+
+@contextmanager
+def helper(prepare: Callable[[], None]) -> Iterator[Helper | None]:
+    """A Helper for the length of the block (None where forking is not
+    safe); ended when the block ends, at once if it raised."""
+    if not can_fork():
+        yield None
+        return
+    context = multiprocessing.get_context("fork")
+    ours, theirs = context.Pipe()
+    process = context.Process(target=Helper._serve, args=(theirs, prepare), name="hdjoint helper")
+    process.start()
+    theirs.close()  # so the helper reads the end of the pipe once this process is gone
+    try:
+        yield Helper(process, ours)
+    except BaseException:
+        process.terminate()
+        raise
+    finally:
+        try:
+            ours.send(None)
+        except OSError:  # it has already ended
+            pass
+        ours.close()
+        process.join()

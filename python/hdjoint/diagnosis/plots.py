@@ -1,8 +1,29 @@
 """Figures of a diagnosis. Each takes the arrays it shows (the report
-module gathers them) and an Axes, and returns the Axes."""
+module gathers them) and an Axes, and returns the Axes. matplotlib is
+imported only where a figure is drawn (png_uri)."""
 from __future__ import annotations
 
 import numpy as np
+
+from hdjoint.io.figures import bare_figure, png_data_uri
+
+
+def png_uri(job: tuple) -> str:
+    """A figure as a PNG data URI: job is (plot, its arguments after the Axes, size)."""
+    plot, args, size = job
+    fig = bare_figure(size)
+    plot(fig.add_subplot(), *args)
+    return png_data_uri(fig)
+
+
+def _title(ax, text):
+    ax.set_title(text)
+    return ax
+
+
+def prepare_drawing() -> None:
+    """What a process's first figure would wait for: matplotlib imported, a font loaded."""
+    png_uri((_title, ("warm-up",), (1, 1)))
 
 # Where the two models agree the corrected curve lies on the nominal one: drawn dashed and thinner on top, so
 # the nominal curve still shows beneath it.

@@ -34,6 +34,16 @@ def diagnose_to_directory(recording, params, out, validate=(), time_unit: str | 
 
 
 def _diagnose_locked(paths, params, out, validate, time_unit, current_sign) -> dict:
+    from hdjoint.diagnosis.forked import helper
+    from hdjoint.diagnosis.plots import prepare_drawing
+    # The report's figures are drawn by a helper that imports matplotlib while the diagnosis runs.
+    with helper(prepare_drawing) as drawing:
+        doc, page = _diagnosed(paths, params, validate, time_unit, current_sign, drawing)
+    write_diagnosis(out, doc, page)
+    return doc
+
+
+def _diagnosed(paths, params, validate, time_unit, current_sign, drawing) -> tuple[dict, str]:
     from hdjoint.io import parameters
     from hdjoint.diagnosis import report
     from hdjoint.diagnosis.prepare import DiagnosisError
@@ -61,9 +71,7 @@ def _diagnose_locked(paths, params, out, validate, time_unit, current_sign) -> d
         raise RuntimeError(f"{', '.join(map(str, paths))}: the diagnosis failed ({e})") from None
     doc["screening"] = ([dict(s.as_dict(), role="diagnosed") for s in screened]
                         + [dict(s.as_dict(), role="validation") for s in screened_others])
-    page = report.build(result, doc)
-    write_diagnosis(out, doc, page)
-    return doc
+    return doc, report.build(result, doc, drawing)
 
 
 def screened_recordings(recs):
