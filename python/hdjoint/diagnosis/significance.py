@@ -27,8 +27,8 @@ from __future__ import annotations
 from functools import lru_cache
 
 import numpy as np
-from scipy.stats import norm
 
+from hdjoint.diagnosis import normal as norm
 
 from hdjoint.diagnosis.structure import relative_fold_gains
 
