@@ -62,18 +62,27 @@ class NullNoise:
         self.n = residuals.shape[1]
         self.rotation = _rotation(self.n, seed)
         self._made: dict[tuple, np.ndarray] = {}
+        self._channel: dict[int, np.ndarray] = {}
 
     def replicates(self, rows: list[int]) -> np.ndarray:
         """(replicate, channel, sample) noise for the channels `rows` (the same
         array for the same rows: every hypothesis of a part reads one)."""
         key = tuple(rows)
         if key not in self._made:
-            spectra = self.spectra[list(rows)]
-            made = np.fft.irfft(spectra[None, :, :] * self.rotation[:, None, :], n=self.n, axis=2)
-            if self.compared is not None:
-                made *= self.compared[list(rows)][None, :, :]
-            self._made[key] = made
+            made = [self._of_channel(row) for row in rows]
+            self._made[key] = made[0][:, None, :] if len(made) == 1 else np.stack(made, axis=1)
         return self._made[key]
+
+    def _of_channel(self, row: int) -> np.ndarray:
+        """(replicate, sample) noise of one channel, made once: without a
+        sensor a part's rows overlap another's (the transmission is in both
+        channels), and each channel's transform is the same alone or with others."""
+        if row not in self._channel:
+            made = np.fft.irfft(self.spectra[row][None, :] * self.rotation, n=self.n, axis=1)
+            if self.compared is not None:
+                made *= self.compared[row][None, :]
+            self._channel[row] = made
+        return self._channel[row]
 
     def prepare(self, row_sets: list[list[int]]) -> None:
         """Make the replicates of each set of rows now (before forking: the children share them)."""
