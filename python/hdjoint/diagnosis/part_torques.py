@@ -19,7 +19,6 @@ from collections import OrderedDict
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.integrate import cumulative_trapezoid
 
 from hdjoint import _core
 from hdjoint.io import parameters
@@ -350,7 +349,7 @@ def current_charge(prep: Prepared, shift: float) -> np.ndarray:
         x = t + shift
         j = np.clip(np.searchsorted(t, x, side="right") - 1, 0, len(t) - 2)
         dt = np.diff(t)
-        cumulative = cumulative_trapezoid(i, t, initial=0.0)
+        cumulative = np.concatenate(([0.0], np.cumsum(dt * (i[1:] + i[:-1]) / 2.0)))  # int i dt at each sample (trapezoids)
         u = np.clip(x - t[j], 0.0, dt[j])
         inside = cumulative[j] + i[j] * u + 0.5 * (i[j + 1] - i[j]) / dt[j] * u * u
         return inside + np.where(x < t[0], i[0] * (x - t[0]), 0.0) + np.where(x > t[-1], i[-1] * (x - t[-1]), 0.0)
