@@ -131,18 +131,39 @@ def forked_map(function: Callable, workers: int | None = None) -> Iterator[tuple
         _function = None
 
 
+# A helper's priority below the work it runs beside (nice increment): what
+# it draws fills the cores the diagnosis leaves idle, and never slows the
+# diagnosis's own pieces on a busy core.
+HELPER_NICENESS = 5
+
+
 class Helper:
     """A process forked ahead of its work: it runs `prepare` while this one
     computes, then maps a function over pieces on request (map_forked, from
-    its prepared state); pieces, function and results cross pickled."""
+    its prepared state, at HELPER_NICENESS); pieces, function and results
+    cross pickled. One request at a time: submit, then collect."""
 
     def __init__(self, process, connection):
         self.process, self.connection = process, connection
+        self.request: tuple | None = None
+        self.sent = False
 
-    def map(self, function: Callable[[T], object], pieces: list[T]) -> list:
-        """[function(piece) for piece in pieces], by the helper (from here, should it have ended)."""
+    def submit(self, function: Callable[[T], object], pieces: list[T]) -> None:
+        """Start [function(piece) for piece in pieces] in the helper; collect() returns it."""
+        self.request = (function, pieces)
         try:
-            self.connection.send((function, pieces))
+            self.connection.send(self.request)
+            self.sent = True
+        except OSError:  # it has ended: collect() maps them here
+            self.sent = False
+
+    def collect(self) -> list:
+        """The submitted request's results (mapped here, should the helper have ended)."""
+        function, pieces = self.request
+        self.request = None
+        try:
+            if not self.sent:
+                raise EOFError
             ok, value = self.connection.recv()
         except (EOFError, OSError):
             return map_forked(lambda i: function(pieces[i]), len(pieces))
@@ -150,9 +171,15 @@ class Helper:
             raise RuntimeError(value)
         return value
 
+    def map(self, function: Callable[[T], object], pieces: list[T]) -> list:
+        """[function(piece) for piece in pieces], by the helper (from here, should it have ended)."""
+        self.submit(function, pieces)
+        return self.collect()
+
     @staticmethod
     def _serve(connection, prepare: Callable[[], None]) -> None:
         _quiet_on_ctrl_c()
+        os.nice(HELPER_NICENESS)
         prepare()
         while True:
             try:
