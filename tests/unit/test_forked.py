@@ -207,3 +207,42 @@ def test_no_helper_where_forking_is_unsafe():
     finally:
         stop.set()
         other.join()
+
+
+def _pid_then_sleep(path):
+    with open(path, "a") as f:
+        f.write(f"{os.getpid()}\n")
+    import time
+    time.sleep(60)
+
+
+def _helper_interrupted_while_mapping(folder):
+    import time
+    try:
+        with forked.helper(_prepare) as helper:
+            helper.submit(_pid_then_sleep, [folder / "a", folder / "b"])
+            while not ((folder / "a").exists() and (folder / "b").exists()):
+                time.sleep(0.05)
+            raise KeyboardInterrupt
+    except KeyboardInterrupt:
+        return [int(p.read_text()) for p in (folder / "a", folder / "b")]
+
+
+def test_a_helper_ended_while_mapping_ends_its_children_too(tmp_path):
+    import time
+    status, _, pids = _in_single_threaded_process(lambda: _helper_interrupted_while_mapping(tmp_path))
+    assert status == "ok"
+    deadline = time.monotonic() + 10
+    alive = pids
+    while alive and time.monotonic() < deadline:
+        time.sleep(0.1)
+        alive = [pid for pid in alive if _alive(pid)]
+    assert not alive, "the helper's children outlived it"
+
+
+def _alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().split(")")[-1].split()[0] != "Z"  # a zombie has ended
+    except FileNotFoundError:
+        return False

@@ -52,6 +52,10 @@ def _quiet_on_ctrl_c() -> None:
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
+def _exit_on_sigterm(signum, frame):
+    raise SystemExit(128 + signum)
+
+
 def _pool(workers: int):
     return multiprocessing.get_context("fork").Pool(workers, initializer=_quiet_on_ctrl_c)
 
@@ -179,6 +183,7 @@ class Helper:
     @staticmethod
     def _serve(connection, prepare: Callable[[], None]) -> None:
         _quiet_on_ctrl_c()
+        signal.signal(signal.SIGTERM, _exit_on_sigterm)  # its own children are ended on the way out
         os.nice(HELPER_NICENESS)
         prepare()
         while True:
