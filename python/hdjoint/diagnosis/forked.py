@@ -136,9 +136,9 @@ def forked_map(function: Callable, workers: int | None = None) -> Iterator[tuple
 
 
 # A helper's priority below the work it runs beside (nice increment): what
-# it draws fills the cores the diagnosis leaves idle, and never slows the
-# diagnosis's own pieces on a busy core.
-HELPER_NICENESS = 5
+# it draws fills the cores the diagnosis leaves idle, and takes a tenth of a
+# busy core from the diagnosis's own pieces (the kernel's weights at +10).
+HELPER_NICENESS = 10
 
 
 class Helper:
