@@ -29,7 +29,6 @@ from functools import lru_cache
 import numpy as np
 
 from hdjoint.diagnosis import normal as norm
-
 from hdjoint.diagnosis.structure import relative_fold_gains
 
 
@@ -69,8 +68,9 @@ class NullNoise:
         array for the same rows: every hypothesis of a part reads one)."""
         key = tuple(rows)
         if key not in self._made:
-            made = [self._of_channel(row) for row in rows]
-            self._made[key] = made[0][:, None, :] if len(made) == 1 else np.stack(made, axis=1)
+            made = [self._of_channel(row)[:, None, :] for row in rows]
+            self._made[key] = (made[0] if len(made) == 1 else np.concatenate(made, axis=1) if made
+                               else np.zeros((REPLICATES, 0, self.n)))
         return self._made[key]
 
     def _of_channel(self, row: int) -> np.ndarray:
