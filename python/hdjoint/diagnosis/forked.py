@@ -136,9 +136,11 @@ def forked_map(function: Callable, workers: int | None = None) -> Iterator[tuple
 
 
 # A helper's priority below the work it runs beside (nice increment): what
-# it draws fills the cores the diagnosis leaves idle, and takes a tenth of a
-# busy core from the diagnosis's own pieces (the kernel's weights at +10).
-HELPER_NICENESS = 10
+# it draws fills the cores the diagnosis leaves idle and takes a quarter of a
+# busy core from the diagnosis's own pieces (the kernel's weights at +5);
+# lower still, it would wait long for a core on a machine others load, while
+# the diagnosis, finished, waits for its figures.
+HELPER_NICENESS = 5
 
 
 class Helper:
