@@ -137,3 +137,27 @@ def test_a_resized_parameter_is_given_with_its_unit_and_meaning():
     assert "wg_load = 0.9973 [0.9895, 1.005] (share of the wave generator torque" in line
     assert "Kf = 9000 [0.9895, 1.005] N.m/rad (flexspline stiffness" in line and "nominal 1e+04" in line
     assert table()["Kf"].unit == "N.m/rad"
+
+
+def test_the_figures_started_when_the_corrected_set_is_settled_are_the_finished_diagnosis_ones():
+    """`hdjoint diagnose` starts drawing before the detection limits and the
+    findings document: from what the pipeline hands over then, the same figures."""
+    from hdjoint.diagnosis import report
+    from hdjoint.diagnosis.findings import where
+    from hdjoint.diagnosis.pipeline import diagnose
+    case = next(c for c in CASES if c.present == ("backlash",))
+    settled = []
+    result, doc = diagnose(record(case, duration=12.0), nominal_for(case), workers=1,
+                           when_settled=lambda *handed: settled.append(handed))
+    assert len(settled) == 1 and doc["findings"]
+    objective, calibrated, corrected, findings = settled[0]
+    early = report.figures(objective, calibrated, corrected,
+                           [s for f in findings for s in where(objective, f)["time_segments"]])
+    late = report.figures(result.objective, result.calibrated_params, doc["params"],
+                          [s for f in doc["findings"] for s in f["where"]["time_segments"]])
+    assert (early.where, early.loop, early.fit) == (late.where, late.loop, late.fit)
+    assert len(early.jobs) == len(late.jobs)
+    for (plot, args, size), (plot_late, args_late, size_late) in zip(early.jobs, late.jobs):
+        assert plot is plot_late and size == size_late
+        for a, b in zip(args, args_late):
+            assert np.array_equal(a, b, equal_nan=True) if isinstance(a, np.ndarray) else a == b

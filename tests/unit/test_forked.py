@@ -141,3 +141,108 @@ def test_no_lending_while_lent_nor_where_forking_is_unsafe():
                 return outer is not None, inner is None and inner_function is abs
     status, _, out = _in_single_threaded_process(nested)
     assert status == "ok" and out == (True, True)
+
+
+_PREPARED = []  # what a helper's prepare leaves behind, read by its pieces
+
+
+def _prepare():
+    _PREPARED.append(os.getpid())
+
+
+def _prepared_by_and_square(i):
+    return _PREPARED[:], os.getpid(), i * i
+
+
+def _helper_maps():
+    with forked.helper(_prepare) as helper:
+        out = helper.map(_prepared_by_and_square, [1, 2, 3, 4])
+        helper_pid = helper.process.pid
+        alive = helper.process.is_alive()
+    return out, helper_pid, alive, helper.process.exitcode
+
+
+def test_a_helper_prepares_once_then_maps_from_its_prepared_state():
+    status, caller, (out, helper_pid, alive, exitcode) = _in_single_threaded_process(_helper_maps)
+    assert status == "ok"
+    assert [v for _, _, v in out] == [1, 4, 9, 16]
+    assert all(prepared == [helper_pid] for prepared, _, _ in out)  # prepared in the helper, inherited
+    assert {pid for _, pid, _ in out} - {caller, helper_pid}, "no piece ran in the helper's children"
+    assert _PREPARED == [] and alive and exitcode == 0  # never prepared here; ended with the block
+
+
+def _helper_that_failed():
+    def fails():
+        raise ImportError("no matplotlib here")
+    with forked.helper(fails) as helper:
+        helper.process.join()
+        return helper.map(_pid_and_square, [1, 2])
+
+
+def test_pieces_are_mapped_here_when_the_helper_has_ended():
+    status, caller, out = _in_single_threaded_process(_helper_that_failed)
+    assert status == "ok" and [v for _, v in out] == [1, 4]
+
+
+def _helper_ended_by_an_error():
+    try:
+        with forked.helper(_prepare) as helper:
+            raise KeyboardInterrupt
+    except KeyboardInterrupt:
+        return helper.process.exitcode
+
+
+def test_a_block_that_raises_ends_its_helper_at_once():
+    status, _, exitcode = _in_single_threaded_process(_helper_ended_by_an_error)
+    assert status == "ok" and exitcode is not None and exitcode != 0
+
+
+def test_no_helper_where_forking_is_unsafe():
+    stop = threading.Event()
+    other = threading.Thread(target=stop.wait)
+    other.start()
+    try:
+        with forked.helper(_prepare) as helper:
+            assert helper is None
+    finally:
+        stop.set()
+        other.join()
+
+
+def _pid_then_sleep(path):
+    with open(path, "a") as f:
+        f.write(f"{os.getpid()}\n")
+    import time
+    time.sleep(60)
+
+
+def _helper_interrupted_while_mapping(folder):
+    import time
+    try:
+        with forked.helper(_prepare) as helper:
+            helper.submit(_pid_then_sleep, [folder / "a", folder / "b"])
+            while not ((folder / "a").exists() and (folder / "b").exists()):
+                time.sleep(0.05)
+            raise KeyboardInterrupt
+    except KeyboardInterrupt:
+        return [int(p.read_text()) for p in (folder / "a", folder / "b")]
+
+
+def test_a_helper_ended_while_mapping_ends_its_children_too(tmp_path):
+    import time
+    status, _, pids = _in_single_threaded_process(lambda: _helper_interrupted_while_mapping(tmp_path))
+    assert status == "ok"
+    deadline = time.monotonic() + 10
+    alive = pids
+    while alive and time.monotonic() < deadline:
+        time.sleep(0.1)
+        alive = [pid for pid in alive if _alive(pid)]
+    assert not alive, "the helper's children outlived it"
+
+
+def _alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().split(")")[-1].split()[0] != "Z"  # a zombie has ended
+    except FileNotFoundError:
+        return False

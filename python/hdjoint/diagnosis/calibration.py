@@ -25,8 +25,8 @@ from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
-from scipy.stats import norm
 
+from hdjoint.diagnosis import normal as norm
 from hdjoint.io import parameters
 from hdjoint.diagnosis.rules import IDENTIFIED_RATIO, INTERVAL, RESIZE_Z
 

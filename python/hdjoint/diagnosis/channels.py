@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hdjoint.diagnosis.motor_rest import motor_at_rest
-from hdjoint.diagnosis.part_torques import ESTIMATES, SMOOTHED_PARTS, Prepared, depends_on, sharp_transmission
+from hdjoint.diagnosis.part_torques import ESTIMATES, SMOOTHED_PARTS, Prepared, Recent, depends_on, sharp_transmission
 
 
 @dataclass
@@ -96,7 +96,7 @@ def _without_mean(r: np.ndarray, over: np.ndarray, allowance: float) -> np.ndarr
 
 class Evaluator:
     """Torque estimates and channel residuals for a parameter set, with the
-    estimates of parts whose parameters did not change reused. `offset_rows`:
+    recent estimates of parts whose parameters did not change reused. `offset_rows`:
     the samples whose mean a channel is compared free of (mean_allowance;
     default: every finite sample). A channel with the motor's estimate
     compares nothing where the motor rests (motor_rest.py): 0 there."""
@@ -106,7 +106,7 @@ class Evaluator:
         self.channels = channels
         self.offset_rows = offset_rows
         self.motor_rest = motor_at_rest(prep.kin, prep.rec.time, prep.starts)
-        self._cache: dict[str, tuple[tuple, np.ndarray]] = {}
+        self._cache: dict[str, Recent] = {}  # slot (a part, its smoothed or indexed estimate) -> recent values
         self.part_params = {part: depends_on(part) for part in ESTIMATES}
         current = np.abs(prep.rec.i_m[np.isfinite(prep.rec.i_m)])
         self.largest_current = float(np.percentile(current, 98)) if len(current) else 0.0
@@ -115,12 +115,12 @@ class Evaluator:
         if part == "sensor":
             return self.prep.rec.tau_sensor
         key = tuple(p.get(n, 0.0) for n in self.part_params[part]) + (self.prep.current_shift,)
-        hit = self._cache.get(part)
-        if hit is not None and hit[0] == key:
-            return hit[1]
-        value = ESTIMATES[part](self.prep, p)
-        self._cache[part] = (key, value)
-        return value
+        recent = self._recent(part)
+        value = recent.get(key)
+        return value if value is not None else recent.put(key, ESTIMATES[part](self.prep, p))
+
+    def _recent(self, slot: str) -> Recent:
+        return self._cache.setdefault(slot, Recent())
 
     def reference(self, channel: Channel, p: dict) -> np.ndarray:
         """The channel's reference over the whole run, through the smoothing
@@ -156,11 +156,10 @@ class Evaluator:
         value = self.estimate(channel.part, p)
         if not channel.smooths_part():
             return value
-        slot = f"{channel.part}@smoothed"
-        hit = self._cache.get(slot)
+        recent = self._recent(f"{channel.part}@smoothed")
+        hit = recent.get(id(value))  # it holds `value`, whose id no other array can take meanwhile
         if hit is None or hit[0] is not value:
-            hit = (value, self.prep.kin.smooth(np.nan_to_num(value)))
-            self._cache[slot] = hit
+            hit = recent.put(id(value), (value, self.prep.kin.smooth(np.nan_to_num(value))))
         return hit[1]
 
     def residual(self, channel: Channel, p: dict) -> np.ndarray:
@@ -179,11 +178,10 @@ class Evaluator:
         if channel.smooths_part():
             return self.residual(channel, p)[index]
         key = (id(index), self.prep.current_shift) + tuple(p.get(n, 0.0) for n in self.part_params[channel.part])
-        slot = f"{channel.part}@index"
-        hit = self._cache.get(slot)
-        if hit is None or hit[0] != key:
-            hit = (key, ESTIMATES[channel.part](self.prep, p, index))
-            self._cache[slot] = hit
+        recent = self._recent(f"{channel.part}@index")
+        hit = recent.get(key)  # it holds `index`, whose id no other array can take meanwhile
+        if hit is None or hit[0] is not index:
+            hit = recent.put(key, (index, ESTIMATES[channel.part](self.prep, p, index)))
         r = self.reference(channel, p)[index] - hit[1]
         compared = self.compared(channel)
         compared = None if compared is None else compared[index]

@@ -25,8 +25,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.stats import norm
 
+from hdjoint.diagnosis import normal as norm
 from hdjoint.diagnosis.rules import INTERVAL
 
 

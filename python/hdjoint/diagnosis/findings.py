@@ -227,7 +227,7 @@ def separate_by(effects) -> str:
 
 
 def _interval(fit_std: dict, params: dict, name: str) -> list[float] | None:
-    from scipy.stats import norm
+    from hdjoint.diagnosis import normal as norm
     std = fit_std.get(name)
     if std is None or not np.isfinite(std):
         return None

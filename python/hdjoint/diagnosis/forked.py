@@ -10,7 +10,11 @@ inherit held) the pieces run one after the other, with the same results.
 
 A fit's finite-difference Jacobian is such a computation too: one residual
 evaluation per parameter (forked_map lends a least-squares solver a
-map-like over forked children)."""
+map-like over forked children).
+
+A Helper is forked ahead of its pieces: it prepares (imports matplotlib)
+on the core the diagnosis's serial stages leave idle, then maps pieces
+sent to it from that prepared state."""
 from __future__ import annotations
 
 import multiprocessing
@@ -46,6 +50,10 @@ def _quiet_on_ctrl_c() -> None:
     line's) runs only between bytecodes, and a child blocked in C never reached one."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def _exit_on_sigterm(signum, frame):
+    raise SystemExit(128 + signum)
 
 
 def _pool(workers: int):
@@ -125,3 +133,96 @@ def forked_map(function: Callable, workers: int | None = None) -> Iterator[tuple
     finally:
         columns.close()
         _function = None
+
+
+# A helper's priority below the work it runs beside (nice increment): what
+# it draws fills the cores the diagnosis leaves idle and takes a quarter of a
+# busy core from the diagnosis's own pieces (the kernel's weights at +5);
+# lower still, it would wait long for a core on a machine others load, while
+# the diagnosis, finished, waits for its figures.
+HELPER_NICENESS = 5
+
+
+class Helper:
+    """A process forked ahead of its work: it runs `prepare` while this one
+    computes, then maps a function over pieces on request (map_forked, from
+    its prepared state, at HELPER_NICENESS); pieces, function and results
+    cross pickled. One request at a time: submit, then collect."""
+
+    def __init__(self, process, connection):
+        self.process, self.connection = process, connection
+        self.request: tuple | None = None
+        self.sent = False
+
+    def submit(self, function: Callable[[T], object], pieces: list[T]) -> None:
+        """Start [function(piece) for piece in pieces] in the helper; collect() returns it."""
+        self.request = (function, pieces)
+        try:
+            self.connection.send(self.request)
+            self.sent = True
+        except OSError:  # it has ended: collect() maps them here
+            self.sent = False
+
+    def collect(self) -> list:
+        """The submitted request's results (mapped here, should the helper have ended)."""
+        function, pieces = self.request
+        self.request = None
+        try:
+            if not self.sent:
+                raise EOFError
+            ok, value = self.connection.recv()
+        except (EOFError, OSError):
+            return map_forked(lambda i: function(pieces[i]), len(pieces))
+        if not ok:
+            raise RuntimeError(value)
+        return value
+
+    def map(self, function: Callable[[T], object], pieces: list[T]) -> list:
+        """[function(piece) for piece in pieces], by the helper (from here, should it have ended)."""
+        self.submit(function, pieces)
+        return self.collect()
+
+    @staticmethod
+    def _serve(connection, prepare: Callable[[], None]) -> None:
+        _quiet_on_ctrl_c()
+        signal.signal(signal.SIGTERM, _exit_on_sigterm)  # its own children are ended on the way out
+        os.nice(HELPER_NICENESS)
+        prepare()
+        while True:
+            try:
+                request = connection.recv()
+            except EOFError:  # the parent is gone
+                return
+            if request is None:
+                return
+            function, pieces = request
+            try:
+                connection.send((True, map_forked(lambda i: function(pieces[i]), len(pieces))))
+            except Exception as e:  # told to the parent, which raises it
+                connection.send((False, f"{type(e).__name__}: {e}"))
+
+
+@contextmanager
+def helper(prepare: Callable[[], None]) -> Iterator[Helper | None]:
+    """A Helper for the length of the block (None where forking is not
+    safe); ended when the block ends, at once if it raised."""
+    if not can_fork():
+        yield None
+        return
+    context = multiprocessing.get_context("fork")
+    ours, theirs = context.Pipe()
+    process = context.Process(target=Helper._serve, args=(theirs, prepare), name="hdjoint helper")
+    process.start()
+    theirs.close()  # so the helper reads the end of the pipe once this process is gone
+    try:
+        yield Helper(process, ours)
+    except BaseException:
+        process.terminate()
+        raise
+    finally:
+        try:
+            ours.send(None)
+        except OSError:  # it has already ended
+            pass
+        ours.close()
+        process.join()

@@ -6,7 +6,7 @@ import math
 from dataclasses import dataclass, field
 
 from hdjoint.diagnosis.calibration import Calibrated
-from scipy.stats import norm
+from hdjoint.diagnosis import normal as norm
 
 from hdjoint.diagnosis.effects import Effect
 from hdjoint.diagnosis.rules import FALSE_DISCOVERY_RATE, MIN_GAIN, SEEN_BIC, UNCONFIRMED_GAIN, steady_over_folds

@@ -16,10 +16,10 @@ localises mismatches in: an effect lives in one part of the model.
 """
 from __future__ import annotations
 
+from collections import OrderedDict
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.integrate import cumulative_trapezoid
 
 from hdjoint import _core
 from hdjoint.io import parameters
@@ -28,6 +28,32 @@ from hdjoint.diagnosis.effects import friction_law_parameters, part_parameters
 from hdjoint.diagnosis.effects.kinematic_error import EFFECT as KINEMATIC_ERROR
 from hdjoint.diagnosis.effects.kinematic_error import KINEMATIC_EQ7
 from hdjoint.diagnosis.kinematics import Kinematics, _Filter
+
+
+# Values kept per cache: a fit's Jacobian moves one parameter at a time and
+# comes back to its point, so keeping only the last value, a fit recomputed
+# the one at its point after every column that moved it.
+RECENT = 8
+
+
+class Recent:
+    """The last RECENT values computed, by key."""
+
+    def __init__(self):
+        self.items: OrderedDict = OrderedDict()
+
+    def get(self, key):
+        value = self.items.get(key)
+        if value is not None:
+            self.items.move_to_end(key)
+        return value
+
+    def put(self, key, value):
+        self.items[key] = value
+        self.items.move_to_end(key)
+        if len(self.items) > RECENT:
+            self.items.popitem(last=False)
+        return value
 
 
 @dataclass
@@ -45,9 +71,9 @@ class Prepared:
 
     def __post_init__(self):
         self._smoothed: dict[int, np.ndarray] = {}
-        self._aligned: tuple | None = None  # (shift, smoothed current), see _smoothed_current
-        self._friction: tuple | None = None  # (law parameters, smoothed friction), see smoothed_friction
-        self._torsion: tuple | None = None  # (geometry parameters but a0, its high-pass part, its rate), see _geometric_torsion
+        self._currents = Recent()  # shift -> smoothed current, see _smoothed_current
+        self._friction = Recent()  # law parameters -> smoothed friction, see smoothed_friction
+        self._torsion = Recent()  # geometry parameters but a0 -> (its high-pass part, its rate), see _geometric_torsion
         self._torsion_basis: _TorsionBasis | None = None
         self._sharp: _Filter | None = None
         self._sharp_smoothed: dict[str, np.ndarray] = {}
@@ -169,10 +195,11 @@ def _geometric_torsion(prep: Prepared, p: dict) -> tuple[np.ndarray, np.ndarray]
     compliance model over the whole run for every Jacobian column of Kf,
     Cf, Kt, ..., most of a diagnosis's time."""
     key = tuple(_get(p, n) for n in GEOMETRY_PARAMETERS if n != "a0")
-    if prep._torsion is None or prep._torsion[0] != key:
+    views = prep._torsion.get(key)
+    if views is None:
         basis = _torsion_basis(prep, p)
-        prep._torsion = (key, basis.at("high_pass", p), basis.at("rate", p))
-    return prep._torsion[1], prep._torsion[2]
+        views = prep._torsion.put(key, (basis.at("high_pass", p), basis.at("rate", p)))
+    return views
 
 
 def torsion_less_kinematic(prep: Prepared, p: dict) -> np.ndarray:
@@ -317,10 +344,10 @@ def smoothed_friction(prep: Prepared, p: dict) -> np.ndarray:
     while the motor creeps below a count per window that speed is
     quantisation, which a Stribeck term with a tiny omega_s would fit.)"""
     key = tuple(_get(p, n) for n in friction_law_parameters())
-    if prep._friction is None or prep._friction[0] != key:
-        law = motor_friction(p, prep.kin.omega_m, prep.t_rel)
-        prep._friction = (key, prep.kin.smooth(law))
-    return prep._friction[1]
+    smoothed = prep._friction.get(key)
+    if smoothed is None:
+        smoothed = prep._friction.put(key, prep.kin.smooth(motor_friction(p, prep.kin.omega_m, prep.t_rel)))
+    return smoothed
 
 
 def torque_constant_scale(prep: Prepared, p: dict, index: np.ndarray | None = None) -> np.ndarray | float:
@@ -350,7 +377,7 @@ def current_charge(prep: Prepared, shift: float) -> np.ndarray:
         x = t + shift
         j = np.clip(np.searchsorted(t, x, side="right") - 1, 0, len(t) - 2)
         dt = np.diff(t)
-        cumulative = cumulative_trapezoid(i, t, initial=0.0)
+        cumulative = np.concatenate(([0.0], np.cumsum(dt * (i[1:] + i[:-1]) / 2.0)))  # int i dt at each sample (trapezoids)
         u = np.clip(x - t[j], 0.0, dt[j])
         inside = cumulative[j] + i[j] * u + 0.5 * (i[j + 1] - i[j]) / dt[j] * u * u
         return inside + np.where(x < t[0], i[0] * (x - t[0]), 0.0) + np.where(x > t[-1], i[-1] * (x - t[-1]), 0.0)
@@ -371,12 +398,11 @@ def _smoothed_current(prep: Prepared, delay: float) -> np.ndarray:
     jitter. The charge integrates the
     alternation away, and d/dt of the smoothed charge is the smoothed
     current wherever the current is smooth."""
-    shift = delay + prep.current_shift
-    if delay == 0.0:  # the aligned current without a delay: every calibration fit reads it
-        if prep._aligned is None or prep._aligned[0] != shift:
-            prep._aligned = (shift, prep.kin.smooth(current_charge(prep, shift), 1))
-        return prep._aligned[1]
-    return prep.kin.smooth(current_charge(prep, shift), 1)
+    shift = delay + prep.current_shift  # every calibration fit reads delay 0; a delay's fit, its delay again
+    current = prep._currents.get(shift)
+    if current is None:
+        current = prep._currents.put(shift, prep.kin.smooth(current_charge(prep, shift), 1))
+    return current
 
 
 def tau_motor(prep: Prepared, p: dict[str, float], index: np.ndarray | None = None) -> np.ndarray:

@@ -32,21 +32,26 @@ from hdjoint.io.recording import Recording
 
 def diagnose(rec: Recording | list[Recording], nominal: dict[str, float],
              progress: Callable[[str], None] | None = None, tolerance: dict[str, float] | None = None,
-             workers: int | None = None, accuracy: float | None = None, noise: dict[str, float] | None = None):
+             workers: int | None = None, accuracy: float | None = None, noise: dict[str, float] | None = None,
+             when_settled: Callable | None = None):
     """Run every stage on one recording or several of the same joint (fitted
     jointly); returns (the DiagnosisResult, the findings document). The
     hypotheses of each round are fitted by `workers` processes (None: one
     per core; 1: in this process), with the same results. `accuracy`: the
     torque accuracy asked of the model, N.m (None: rules.ACCURACY_SHARE of
     the torque span); `noise`: sensors' stated noise ({"i_m": A RMS,
-    "tau_sensor": N.m RMS}; the others are measured on the recording)."""
+    "tau_sensor": N.m RMS}; the others are measured on the recording).
+    `when_settled(objective, calibrated set, corrected set, findings)` is called
+    as soon as the corrected set is final, before the detection limits: a
+    caller may start on it meanwhile (the report's figures)."""
     # The linear algebra here is tall and thin (thousands of samples by a
     # dozen parameters): one BLAS thread is faster than several fighting over two cores.
     with threadpool_limits(limits=1, user_api="blas"):
-        return _diagnose(rec, nominal, progress, tolerance, workers, accuracy, noise)
+        return _diagnose(rec, nominal, progress, tolerance, workers, accuracy, noise, when_settled)
 
 
-def _diagnose(rec, nominal, progress, tolerance, workers, stated_accuracy=None, stated_noise=None):
+def _diagnose(rec, nominal, progress, tolerance, workers, stated_accuracy=None, stated_noise=None,
+              when_settled=None):
     setup = prepare(rec, nominal, tolerance, progress, workers)
     calibrated = calibrate(setup)
     objective = calibrated.objective
@@ -66,6 +71,8 @@ def _diagnose(rec, nominal, progress, tolerance, workers, stated_accuracy=None, 
     resized_findings, unattributed = resized(objective, selection, calibration, settled)
     resized_findings = sorted(gross.findings + resized_findings, key=lambda f: f.p_value)
     unattributed += gross.unexplained
+    if when_settled is not None:
+        when_settled(objective, calibrated.params, p, selection.findings + resized_findings)
     setup.say("measuring the smallest size of each untold effect this recording would show")
     limits = detection_limits(search, selection, {e for f in selection.findings + resized_findings
                                                   for e in f.named()})

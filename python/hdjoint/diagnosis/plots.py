@@ -1,8 +1,29 @@
 """Figures of a diagnosis. Each takes the arrays it shows (the report
-module gathers them) and an Axes, and returns the Axes."""
+module gathers them) and an Axes, and returns the Axes. matplotlib is
+imported only where a figure is drawn (png_uri)."""
 from __future__ import annotations
 
 import numpy as np
+
+from hdjoint.io.figures import bare_figure, png_data_uri
+
+
+def png_uri(job: tuple) -> str:
+    """A figure as a PNG data URI: job is (plot, its arguments after the Axes, size)."""
+    plot, args, size = job
+    fig = bare_figure(size)
+    plot(fig.add_subplot(), *args)
+    return png_data_uri(fig)
+
+
+def _title(ax, text):
+    ax.set_title(text)
+    return ax
+
+
+def prepare_drawing() -> None:
+    """What a process's first figure would wait for: matplotlib imported, a font loaded."""
+    png_uri((_title, ("warm-up",), (1, 1)))
 
 # Where the two models agree the corrected curve lies on the nominal one: drawn dashed and thinner on top, so
 # the nominal curve still shows beneath it.
@@ -50,15 +71,30 @@ def residual_vs_feature(ax, x, before, after, xlabel, bins=30):
     return ax
 
 
-def order_spectrum(ax, angle, before, after, orders, angle_name):
-    """Amplitude of the residual at each order of an angle (least squares per order)."""
-    for y, style, label in ((before, NOMINAL_STYLE, "calibrated nominal"), (after, CORRECTED_STYLE, "corrected")):
-        ok = np.isfinite(y)
+def order_amplitudes(angle, curves, orders) -> list[np.ndarray]:
+    """Each curve's amplitude at each order of `angle` (least squares on its
+    finite samples, with a constant); curves finite on the same samples share
+    each order's basis and solve (the residuals before and after mostly do)."""
+    out: list = [None] * len(curves)
+    finite = [np.isfinite(y) for y in curves]
+    for i, ok in enumerate(finite):
+        group = [j for j in range(i, len(curves)) if out[j] is None and np.array_equal(finite[j], ok)]
+        if not group:
+            continue
+        a, ys = angle[ok], np.column_stack([curves[j][ok] for j in group])
         amps = []
         for k in orders:
-            basis = np.column_stack([np.cos(k * angle[ok]), np.sin(k * angle[ok]), np.ones(ok.sum())])
-            coef, *_ = np.linalg.lstsq(basis, y[ok], rcond=None)
+            coef = np.linalg.lstsq(np.column_stack([np.cos(k * a), np.sin(k * a), np.ones(len(a))]), ys, rcond=None)[0]
             amps.append(np.hypot(coef[0], coef[1]))
+        for column, j in enumerate(group):
+            out[j] = np.array([amp[column] for amp in amps])
+    return out
+
+
+def order_spectrum(ax, angle, before, after, orders, angle_name):
+    """Amplitude of the residual at each order of an angle (least squares per order)."""
+    amplitudes = order_amplitudes(angle, (before, after), orders)
+    for amps, style, label in zip(amplitudes, (NOMINAL_STYLE, CORRECTED_STYLE), ("calibrated nominal", "corrected")):
         ax.plot(orders, amps, marker="o", ms=3, label=label, **style)
     ax.set_xlabel(f"order of {angle_name} (cycles per revolution)")
     ax.set_ylabel("amplitude (N.m)")

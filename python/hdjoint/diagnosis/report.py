@@ -5,10 +5,6 @@ from __future__ import annotations
 
 import html
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 
 from hdjoint.diagnosis import plots as dp
@@ -22,7 +18,6 @@ from hdjoint.diagnosis.rules import (
     STEADY_FOLD_SHARE,
 )
 from hdjoint.diagnosis.structure import candidate_orders
-from hdjoint.io.figures import to_data_uri
 from hdjoint.io.parameters import unit_in_text, values_in_text
 from hdjoint.io.screening import found_anything
 
@@ -59,30 +54,74 @@ def _gain(g: float) -> str:
     return f"{100 * g:.1f} %"
 
 
-def _figure(draw, size=(9, 3.2)) -> str:
-    fig, ax = plt.subplots(figsize=size, constrained_layout=True)
-    draw(ax)
-    return to_data_uri(fig)
+class Figures:
+    """The page's figures, drawn together in forked processes (forked.py):
+    matplotlib's layout and PNG encoding take most of the report's time, and
+    each figure is independent of the others. Each job names its plot
+    function and arrays, so a helper forked before the diagnosis, with
+    matplotlib imported meanwhile, can draw them while the diagnosis ends.
+    `where`, `loop` and `fit` are the page's parts that show them."""
 
-
-class _Figures:
-    """The page's figures, drawn together at the end in forked processes
-    (forked.py): matplotlib's layout and PNG encoding take most of the
-    report's time, and each figure is independent of the others."""
-
-    def __init__(self):
+    def __init__(self, helper=None):
         self.jobs: list[tuple] = []
+        self.helper = helper
+        self.where = self.loop = self.fit = ""
 
-    def add(self, draw, size=(9, 3.2)) -> str:
-        """A placeholder for the figure `draw` makes, filled in by fill()."""
-        self.jobs.append((draw, size))
+    def add(self, plot, args: tuple, size=(9, 3.2)) -> str:
+        """A placeholder for the figure plot(ax, *args) makes, filled in by fill()."""
+        self.jobs.append((plot, args, size))
         return f"\x00figure {len(self.jobs) - 1}\x00"
 
     def fill(self, page: str) -> str:
-        uris = map_forked(lambda i: _figure(*self.jobs[i]), len(self.jobs))
+        if self.helper is not None:
+            uris = self.helper.collect()
+        else:
+            uris = map_forked(lambda i: dp.png_uri(self.jobs[i]), len(self.jobs))
         for i, uri in enumerate(uris):
             page = page.replace(f"\x00figure {i}\x00", uri)
         return page
+
+
+def figures(diag, p0: dict, p1: dict, segments: list, helper=None) -> Figures:
+    """The report's figures of a diagnosis (its Objective) from the
+    calibrated set p0 to the corrected set p1, the findings' time
+    `segments` shaded: started now by `helper` (forked.Helper, prepared with
+    plots.prepare_drawing) if given, else drawn by processes forked in fill()."""
+    rec, kin = diag.rec, diag.prep.kin
+    drawn = Figures(helper)
+    # Where: every channel's residual over time, before and after, segments marked.
+    figs = []
+    for c in diag.channels:
+        before, after = diag.shown_residual(c, p0), diag.shown_residual(c, p1)
+        figs.append(_img(drawn.add(dp.residual_over_time, (rec.time, before, after, segments, f"{c.name} residual")),
+                         f"Residual of the {c.name} channel over time (located segments shaded)"))
+        figs.append(_img(drawn.add(dp.residual_vs_feature, (kin.omega_m, before, after, "motor speed (rad/s)"),
+                                   (6, 3)),
+                         f"{c.name}: mean residual vs motor speed (regime)"))
+        orders = candidate_orders("theta_m", np.ptp(rec.theta_m))
+        if orders:
+            figs.append(_img(drawn.add(dp.order_spectrum, (rec.theta_m, before, after, orders, "theta_m"), (6, 3)),
+                             f"{c.name}: order spectrum of the residual over the motor angle"))
+    drawn.where = "<h2>Where the model and the recording differ</h2>" + "".join(figs)
+
+    # The torque-torsion loop, where the transmission is involved.
+    if any("transmission" in c.parts() for c in diag.channels):
+        from hdjoint import _core
+        from hdjoint.io import parameters
+        est = _core.compliance(parameters.for_estimator(p1), rec.i_m, rec.theta_m, rec.theta_l)
+        reference = diag.reference_torque(p1)
+        drawn.loop = "<h2>Torque against torsion</h2>" + _img(
+            drawn.add(dp.torque_torsion_loop, (est["dtheta_f"], reference, est["tau_compliance"]), (6, 4)),
+            "Reference torque vs flexspline torsion: loops mean hysteresis, flats backlash")
+
+    labels = [c.name for c in diag.channels]
+    rb = [float(np.sqrt(np.nanmean(diag.shown_residual(c, p0)[diag.test] ** 2))) for c in diag.channels]
+    ra = [float(np.sqrt(np.nanmean(diag.shown_residual(c, p1)[diag.test] ** 2))) for c in diag.channels]
+    drawn.fit = _img(drawn.add(dp.rms_bars, (labels, rb, ra, "held-out RMS residual (N.m)"), (6, 3)),
+                     "Held-out residual RMS per channel: calibrated nominal vs corrected model")
+    if helper is not None:
+        helper.submit(dp.png_uri, drawn.jobs)
+    return drawn
 
 
 def _img(uri: str, alt: str) -> str:
@@ -265,42 +304,15 @@ def _extrapolation_notes(entries: list[dict]) -> str:
             "the model's form there rather than its fitted parameters.</p><ul>" + "".join(notes) + "</ul>")
 
 
-def build(result, doc: dict) -> str:
-    """The report's HTML for a finished diagnosis (DiagnosisResult) and its findings document."""
+def build(result, doc: dict, helper=None, drawn: Figures | None = None) -> str:
+    """The report's HTML for a finished diagnosis (DiagnosisResult) and its
+    findings document; its figures those `drawn` started (figures()), else
+    drawn now (by `helper`, if given)."""
     diag = result.objective
-    rec, kin = diag.rec, diag.prep.kin
-    p0, p1 = result.calibrated_params, doc["params"]
-    sections = []
-    drawn = _Figures()
-
-    # Where: every channel's residual over time, before and after, segments marked.
-    segs = [s for f in doc["findings"] for s in f["where"]["time_segments"]]
-    figs = []
-    for c in diag.channels:
-        before, after = diag.shown_residual(c, p0), diag.shown_residual(c, p1)
-        figs.append(_img(drawn.add(lambda ax, b=before, a=after, name=c.name: dp.residual_over_time(
-            ax, rec.time, b, a, segs, f"{name} residual")),
-                         f"Residual of the {c.name} channel over time (located segments shaded)"))
-        figs.append(_img(drawn.add(lambda ax, b=before, a=after: dp.residual_vs_feature(
-            ax, kin.omega_m, b, a, "motor speed (rad/s)"), (6, 3)),
-                         f"{c.name}: mean residual vs motor speed (regime)"))
-        orders = candidate_orders("theta_m", np.ptp(rec.theta_m))
-        if orders:
-            figs.append(_img(drawn.add(lambda ax, b=before, a=after, k=orders: dp.order_spectrum(
-                ax, rec.theta_m, b, a, k, "theta_m"), (6, 3)),
-                             f"{c.name}: order spectrum of the residual over the motor angle"))
-    sections.append("<h2>Where the model and the recording differ</h2>" + "".join(figs))
-
-    # The torque-torsion loop, where the transmission is involved.
-    trans = [c for c in diag.channels if "transmission" in c.parts()]
-    if trans:
-        from hdjoint import _core
-        from hdjoint.io import parameters
-        est = _core.compliance(parameters.for_estimator(p1), rec.i_m, rec.theta_m, rec.theta_l)
-        reference = diag.reference_torque(p1)
-        sections.append("<h2>Torque against torsion</h2>" + _img(
-            drawn.add(lambda ax: dp.torque_torsion_loop(ax, est["dtheta_f"], reference, est["tau_compliance"]),
-                    (6, 4)), "Reference torque vs flexspline torsion: loops mean hysteresis, flats backlash"))
+    if drawn is None:
+        segments = [s for f in doc["findings"] for s in f["where"]["time_segments"]]
+        drawn = figures(diag, result.calibrated_params, doc["params"], segments, helper)
+    sections = [drawn.where] + ([drawn.loop] if drawn.loop else [])
 
     # Findings.
     if doc["findings"]:
@@ -334,11 +346,7 @@ def build(result, doc: dict) -> str:
         sections.append("".join(parts))
 
     # Fit before/after and the estimator.
-    labels = [c.name for c in diag.channels]
-    rb = [float(np.sqrt(np.nanmean(diag.shown_residual(c, p0)[diag.test] ** 2))) for c in diag.channels]
-    ra = [float(np.sqrt(np.nanmean(diag.shown_residual(c, p1)[diag.test] ** 2))) for c in diag.channels]
-    fit_html = _img(drawn.add(lambda ax: dp.rms_bars(ax, labels, rb, ra, "held-out RMS residual (N.m)"), (6, 3)),
-                    "Held-out residual RMS per channel: calibrated nominal vs corrected model")
+    fit_html = drawn.fit
     if doc.get("estimator"):
         e = doc["estimator"]
         rows = [(name, _fmt(e["nominal"][name]["rms"]), _fmt(e["corrected"][name]["rms"]),

@@ -11,8 +11,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from scipy.stats import norm
-
+from hdjoint.diagnosis import normal as norm
 from hdjoint.diagnosis.calibration import Calibrated, Prior
 from hdjoint.diagnosis.effects import EFFECTS, Effect, owner
 from hdjoint.diagnosis.hypotheses import Finding

@@ -24,14 +24,30 @@ benchmarks/false_alarms.py measures the false-alarm rate this gives on controls.
 """
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
-from scipy.stats import norm
 
-
+from hdjoint.diagnosis import normal as norm
 from hdjoint.diagnosis.structure import relative_fold_gains
 
 
 REPLICATES = 48
+
+
+@lru_cache(maxsize=1)
+def _rotation(n: int, seed: int) -> np.ndarray:
+    """(replicate, frequency): the random phase rotations of a residual of `n`
+    samples, the same for every null drawn with `seed` (each round's, each
+    channel's): made once, as their complex exponentials cost as much as the replicates."""
+    rng = np.random.default_rng(seed)
+    phases = rng.uniform(0.0, 2.0 * np.pi, (REPLICATES, n // 2 + 1))
+    phases[:, 0] = 0.0  # the mean stays real
+    if n % 2 == 0:
+        phases[:, -1] = 0.0  # and so does the Nyquist bin
+    rotation = np.exp(1j * phases)
+    rotation.flags.writeable = False  # shared by every null of this length
+    return rotation
 
 
 class NullNoise:
@@ -43,25 +59,30 @@ class NullNoise:
         # are 0 elsewhere, as the data's residual is (diagnosis.Evaluator.compared).
         self.compared = compared
         self.n = residuals.shape[1]
-        rng = np.random.default_rng(seed)
-        phases = rng.uniform(0.0, 2.0 * np.pi, (REPLICATES, self.spectra.shape[1]))
-        phases[:, 0] = 0.0  # the mean stays real
-        if self.n % 2 == 0:
-            phases[:, -1] = 0.0  # and so does the Nyquist bin
-        self.rotation = np.exp(1j * phases)
+        self.rotation = _rotation(self.n, seed)
         self._made: dict[tuple, np.ndarray] = {}
+        self._channel: dict[int, np.ndarray] = {}
 
     def replicates(self, rows: list[int]) -> np.ndarray:
         """(replicate, channel, sample) noise for the channels `rows` (the same
         array for the same rows: every hypothesis of a part reads one)."""
         key = tuple(rows)
         if key not in self._made:
-            spectra = self.spectra[list(rows)]
-            made = np.fft.irfft(spectra[None, :, :] * self.rotation[:, None, :], n=self.n, axis=2)
-            if self.compared is not None:
-                made *= self.compared[list(rows)][None, :, :]
-            self._made[key] = made
+            made = [self._of_channel(row)[:, None, :] for row in rows]
+            self._made[key] = (made[0] if len(made) == 1 else np.concatenate(made, axis=1) if made
+                               else np.zeros((REPLICATES, 0, self.n)))
         return self._made[key]
+
+    def _of_channel(self, row: int) -> np.ndarray:
+        """(replicate, sample) noise of one channel, made once: without a
+        sensor a part's rows overlap another's (the transmission is in both
+        channels), and each channel's transform is the same alone or with others."""
+        if row not in self._channel:
+            made = np.fft.irfft(self.spectra[row][None, :] * self.rotation, n=self.n, axis=1)
+            if self.compared is not None:
+                made *= self.compared[row][None, :]
+            self._channel[row] = made
+        return self._channel[row]
 
     def prepare(self, row_sets: list[list[int]]) -> None:
         """Make the replicates of each set of rows now (before forking: the children share them)."""

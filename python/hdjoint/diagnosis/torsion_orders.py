@@ -21,8 +21,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import norm
 
+from hdjoint.diagnosis import normal as norm
 from hdjoint.diagnosis.significance import NullNoise, benjamini_hochberg, null_z, p_value
 from hdjoint.diagnosis.rules import INTERVAL
 from hdjoint.diagnosis.structure import HeldOutGain, held_out_gain

@@ -1,20 +1,24 @@
 """Figures. Plot functions take an Axes or make a figure, return the figure,
-and never compute anything the caller could not inspect."""
+and never compute anything the caller could not inspect. pyplot is imported
+only by what needs its figure registry: a report draws on bare Figures."""
 from __future__ import annotations
 
 import io
 import base64
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+
+def _pyplot():
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt
 
 
 def torque_comparison(time, estimates: dict, title: str = ""):
     """Estimates and the reference over time (top) and their errors (bottom)."""
-    fig, (top, bottom) = plt.subplots(2, 1, figsize=(10, 6), sharex=True, constrained_layout=True)
+    fig, (top, bottom) = _pyplot().subplots(2, 1, figsize=(10, 6), sharex=True, constrained_layout=True)
     reference = estimates["reference"]
     top.plot(time, reference, color="k", lw=1.0, label="true torque")
     for name, est in estimates.items():
@@ -34,12 +38,24 @@ def torque_comparison(time, estimates: dict, title: str = ""):
 
 def save(fig, path) -> None:
     fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _pyplot().close(fig)
 
 
-def to_data_uri(fig) -> str:
+def png_data_uri(fig) -> str:
     """PNG as a data: URI, for self-contained HTML reports."""
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=100)
-    plt.close(fig)
     return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode("ascii")
+
+
+def to_data_uri(fig) -> str:
+    """png_data_uri of a pyplot figure, closed."""
+    uri = png_data_uri(fig)
+    _pyplot().close(fig)
+    return uri
+
+
+def bare_figure(size):
+    """A Figure with constrained layout outside pyplot (no registry to close it from)."""
+    from matplotlib.figure import Figure
+    return Figure(figsize=size, constrained_layout=True)

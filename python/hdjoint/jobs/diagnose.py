@@ -34,8 +34,19 @@ def diagnose_to_directory(recording, params, out, validate=(), time_unit: str | 
 
 
 def _diagnose_locked(paths, params, out, validate, time_unit, current_sign) -> dict:
+    from hdjoint.diagnosis.forked import helper
+    from hdjoint.diagnosis.plots import prepare_drawing
+    # The report's figures are drawn by a helper that imports matplotlib while the diagnosis runs.
+    with helper(prepare_drawing) as drawing:
+        doc, page = _diagnosed(paths, params, validate, time_unit, current_sign, drawing)
+    write_diagnosis(out, doc, page)
+    return doc
+
+
+def _diagnosed(paths, params, validate, time_unit, current_sign, drawing) -> tuple[dict, str]:
     from hdjoint.io import parameters
     from hdjoint.diagnosis import report
+    from hdjoint.diagnosis.findings import where
     from hdjoint.diagnosis.prepare import DiagnosisError
     from hdjoint.diagnosis.pipeline import diagnose
     from hdjoint.diagnosis.validation import validate as validate_on
@@ -49,8 +60,15 @@ def _diagnose_locked(paths, params, out, validate, time_unit, current_sign) -> d
         statements = parameters.load_statements(params)
     except parameters.ParameterError as e:
         raise UserError(str(e)) from None
+    started = {}
+
+    def draw_figures(objective, calibrated, corrected, findings):  # the figures drawn while the diagnosis ends
+        segments = [s for f in findings for s in where(objective, f)["time_segments"]]
+        started["figures"] = report.figures(objective, calibrated, corrected, segments, drawing)
+
     try:
-        result, doc = diagnose(recs if len(recs) > 1 else recs[0], nominal, progress=_progress, **statements)
+        result, doc = diagnose(recs if len(recs) > 1 else recs[0], nominal, progress=_progress,
+                               when_settled=draw_figures if drawing is not None else None, **statements)
         if others:
             _progress("checking the corrected model on the other recordings")
             doc["validation"] = [validate_on(o, result.nominal, result.calibrated_params, doc["params"],
@@ -61,9 +79,7 @@ def _diagnose_locked(paths, params, out, validate, time_unit, current_sign) -> d
         raise RuntimeError(f"{', '.join(map(str, paths))}: the diagnosis failed ({e})") from None
     doc["screening"] = ([dict(s.as_dict(), role="diagnosed") for s in screened]
                         + [dict(s.as_dict(), role="validation") for s in screened_others])
-    page = report.build(result, doc)
-    write_diagnosis(out, doc, page)
-    return doc
+    return doc, report.build(result, doc, drawing, started.get("figures"))
 
 
 def screened_recordings(recs):
