@@ -284,14 +284,18 @@ def _slow_torsion_from_link(prep: Prepared, p: dict, elastic: np.ndarray) -> np.
     the kinematics' smoothing of the torsion less the torsion tau_L twists
     the transmission by, read off the compliance law on this recording
     (`elastic`, the torque of the torsion through the transmission's
-    filter, against that torsion, made monotone)."""
+    filter, against that torsion, made monotone), each window on its own."""
     torsion = torsion_less_kinematic(prep, p)
     seen = torsion - _geometric_torsion(prep, p)[0]  # through the transmission's filter
-    ok = np.isfinite(seen) & np.isfinite(elastic)
-    order = np.argsort(seen[ok])
-    law = np.maximum.accumulate(elastic[ok][order])
-    link_torsion = np.interp(np.nan_to_num(tau_link(prep, p)), law, seen[ok][order])
+    link_torsion = prep.per_window(_read_off_law, seen, elastic, np.nan_to_num(tau_link(prep, p)))
     return prep.kin.smooth(np.nan_to_num(torsion)) - link_torsion
+
+
+def _read_off_law(torsion: np.ndarray, torque: np.ndarray, wanted: np.ndarray) -> np.ndarray:
+    """The torsion at which the recorded torque-against-torsion law, made monotone, gives `wanted`."""
+    ok = np.isfinite(torsion) & np.isfinite(torque)
+    order = np.argsort(torsion[ok])
+    return np.interp(wanted, np.maximum.accumulate(torque[ok][order]), torsion[ok][order])
 
 
 def _compliance_inputs(prep: Prepared, p: dict, sharp: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
