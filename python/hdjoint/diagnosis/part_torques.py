@@ -74,6 +74,7 @@ class Prepared:
         self._currents = Recent()  # shift -> smoothed current, see _smoothed_current
         self._friction = Recent()  # law parameters -> smoothed friction, see smoothed_friction
         self._torsion = Recent()  # geometry parameters but a0 -> (its high-pass part, its rate), see _geometric_torsion
+        self._loop_free = Recent()  # all but the loop's parameters -> (loop-free torque, loop drive), see _loop_free
         self._torsion_basis: _TorsionBasis | None = None
         self._sharp: _Filter | None = None
         self._sharp_smoothed: dict[str, np.ndarray] = {}
@@ -251,7 +252,7 @@ def tau_transmission(prep: Prepared, p: dict[str, float], index: np.ndarray | No
     return tau + _get(p, "Df") * (rate if index is None else rate[index])
 
 
-def hysteresis_torque(prep: Prepared, p: dict, sharp: bool = False, elastic: np.ndarray | None = None) -> np.ndarray:
+def hysteresis_torque(prep: Prepared, p: dict, sharp: bool = False) -> np.ndarray:
     """The Dahl hysteresis torque of the compliance model (C++), driven by the
     torsion the compliance model sees (_compliance_inputs): through the
     transmission's filter against a torque sensor, else through the
@@ -263,18 +264,31 @@ def hysteresis_torque(prep: Prepared, p: dict, sharp: bool = False, elastic: np.
     torsion's slow part is the link's torque's (_slow_torsion_from_link):
     where the torque spans a count or two, the encoders' torsion reverses
     with their quantisation and the kinematic error's residue, not with
-    the load, and the loop would flip with them. `elastic`: the compliance
-    torque without the loop through that filter, if already computed."""
+    the load, and the loop would flip with them."""
     native = parameters.for_estimator(dict(p, i_delay=0.0))
     current, theta_m, theta_l = _compliance_inputs(prep, p, sharp)
     if not sharp:
         theta_m, theta_l = prep.smoothed("theta_m", theta_m), prep.smoothed("theta_l", theta_l)
     else:
-        if elastic is None:
-            elastic = _compliance_torque(prep, dict(p, hys_H=0.0), None, True)
-        theta_l = theta_l + _slow_torsion_from_link(prep, p, elastic)
+        theta_l = theta_l + _loop_free(prep, p, sharp)[1]
     return prep.per_window(lambda i, tm, tl: _core.compliance(native, i, tm, tl)["hysteresis_torque"],
                            current, theta_m, theta_l)
+
+
+# The Dahl loop's own parameters: the loop-free torque and the loop's drive do not read them.
+LOOP_PARAMETERS = ("hys_H", "hys_sigma")
+
+
+def _loop_free(prep: Prepared, p: dict, sharp: bool) -> tuple[np.ndarray, np.ndarray | None]:
+    """The compliance torque without the loop, and (through the transmission's
+    filter) what the loop's drive adds to the link angle, cached by every
+    other parameter: a fit of the loop alone moves neither."""
+    key = (sharp, *(v for n, v in sorted(p.items()) if n not in LOOP_PARAMETERS))
+    cached = prep._loop_free.get(key)
+    if cached is None:
+        elastic = _compliance_torque(prep, dict(p, hys_H=0.0), None, sharp)
+        cached = prep._loop_free.put(key, (elastic, _slow_torsion_from_link(prep, p, elastic) if sharp else None))
+    return cached
 
 
 def _slow_torsion_from_link(prep: Prepared, p: dict, elastic: np.ndarray) -> np.ndarray:
@@ -315,8 +329,7 @@ def _compliance_torque(prep: Prepared, p: dict[str, float], index: np.ndarray | 
     """The estimator's compliance model (C++) at the encoders' instants, over
     the recording or at `index`: its current realigned by i_delay, no delay line."""
     if _get(p, "hys_H") > 0.0:
-        elastic = _compliance_torque(prep, dict(p, hys_H=0.0), None, sharp)
-        tau = elastic + hysteresis_torque(prep, p, sharp, elastic if sharp else None)
+        tau = _loop_free(prep, p, sharp)[0] + hysteresis_torque(prep, p, sharp)
         return tau if index is None else tau[index]
     current, theta_m, theta_l = _compliance_inputs(prep, p, sharp)
     native = parameters.for_estimator(dict(p, i_delay=0.0))
