@@ -283,7 +283,7 @@ def _loop_free(prep: Prepared, p: dict, sharp: bool) -> tuple[np.ndarray, np.nda
     """The compliance torque without the loop, and (through the transmission's
     filter) what the loop's drive adds to the link angle, cached by every
     other parameter: a fit of the loop alone moves neither."""
-    key = (sharp, *(v for n, v in sorted(p.items()) if n not in LOOP_PARAMETERS))
+    key = (sharp, *(item for item in sorted(p.items()) if item[0] not in LOOP_PARAMETERS))
     cached = prep._loop_free.get(key)
     if cached is None:
         elastic = _compliance_torque(prep, dict(p, hys_H=0.0), None, sharp)
