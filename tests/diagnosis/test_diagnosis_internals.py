@@ -44,6 +44,27 @@ def test_estimates_depend_on_no_parameter_outside_their_cache_key(diag, part):
         np.testing.assert_array_equal(changed, base, err_msg=f"{part} estimate depends on {name}")
 
 
+@pytest.mark.parametrize("sharp", [False, True])
+def test_the_loop_free_torque_and_drive_depend_on_nothing_outside_their_cache_key(diag, sharp):
+    """A hysteresis fit reuses the loop-free torque and the loop's drive while
+    the parameters the compliance model reads (but the loop's) are unchanged:
+    no other parameter may change them (each value computed afresh here)."""
+    from hdjoint.io import parameters
+    from hdjoint.diagnosis.part_torques import LOOP_PARAMETERS, Recent, _compliance_reads, _loop_free
+
+    def fresh(p):
+        diag.prep._loop_free = Recent()
+        return np.concatenate(_loop_free(diag.prep, p, sharp))
+    p = dict(diag.nominal, hys_H=0.2, hys_sigma=2e4)
+    base = fresh(p)
+    for name, info in parameters.table().items():
+        if name in _compliance_reads() and name not in LOOP_PARAMETERS:
+            continue
+        value = p.get(name, info.default)
+        moved = value * 1.3 + 1e-3 if info.min <= value * 1.3 + 1e-3 <= info.max else info.min
+        np.testing.assert_array_equal(fresh(dict(p, **{name: moved})), base, err_msg=f"depends on {name}")
+
+
 def test_every_effect_of_the_library_has_its_parameters_in_the_model():
     """The diagnosis skips an effect whose parameters the model lacks; in this
     build every effect must be testable, so a typo cannot drop one silently."""

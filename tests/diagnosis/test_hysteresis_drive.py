@@ -53,3 +53,20 @@ def test_the_loops_slow_drive_is_the_links_torque():
     truth's; with its slow part read from the link's torque, 0.65."""
     truth, sharp, _ = _loops(2)
     assert np.corrcoef(sharp, truth)[0, 1] > 0.6
+
+
+def test_the_loop_is_the_compliance_models_own():
+    """The diagnosis runs the loop alone over the cached drive torsion (a fit
+    of the loop's parameters moves nothing else): it must be, sample for
+    sample, the loop the C++ compliance model runs on the same inputs."""
+    from hdjoint import _core
+    from hdjoint.io import parameters
+
+    case = next(c for c in EFFECT_CASES if c.name == "hysteresis")
+    joint = draw(case, 0, 10.0)
+    rec = record(joint, 0)
+    prep = Prepared(rec, kinematics(rec), rec.time - rec.time[0])
+    p = dict(joint.nominal, **ORACLE["hysteresis"](joint), i_delay=0.0)
+    model = _core.compliance(parameters.for_estimator(p), rec.i_m, prep.smoothed("theta_m", rec.theta_m),
+                             prep.smoothed("theta_l", rec.theta_l))
+    np.testing.assert_array_equal(hysteresis_torque(prep, p, sharp=False), model["hysteresis_torque"])

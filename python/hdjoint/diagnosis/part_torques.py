@@ -16,6 +16,7 @@ localises mismatches in: an effect lives in one part of the model.
 """
 from __future__ import annotations
 
+import functools
 from collections import OrderedDict
 from dataclasses import dataclass, field
 
@@ -74,7 +75,7 @@ class Prepared:
         self._currents = Recent()  # shift -> smoothed current, see _smoothed_current
         self._friction = Recent()  # law parameters -> smoothed friction, see smoothed_friction
         self._torsion = Recent()  # geometry parameters but a0 -> (its high-pass part, its rate), see _geometric_torsion
-        self._loop_free = Recent()  # all but the loop's parameters -> (loop-free torque, loop drive), see _loop_free
+        self._loop_free = Recent()  # what the compliance model reads but the loop -> (loop-free torque, loop drive), see _loop_free
         self._torsion_basis: _TorsionBasis | None = None
         self._sharp: _Filter | None = None
         self._sharp_smoothed: dict[str, np.ndarray] = {}
@@ -253,42 +254,60 @@ def tau_transmission(prep: Prepared, p: dict[str, float], index: np.ndarray | No
 
 
 def hysteresis_torque(prep: Prepared, p: dict, sharp: bool = False) -> np.ndarray:
-    """The Dahl hysteresis torque of the compliance model (C++), driven by the
-    torsion the compliance model sees (_compliance_inputs): through the
-    transmission's filter against a torque sensor, else through the
-    kinematics' smoothing. A loop switches over a torsion of H/sigma, a
-    small fraction of an encoder count, so it flips with the torsional
-    vibration: a modelled loop driven through the 6 ms smoothing, which
-    takes that vibration away, does not follow the joint's loop; driven
-    through the transmission's filter, it does. Against a sensor, the
-    torsion's slow part is the link's torque's (_slow_torsion_from_link):
-    where the torque spans a count or two, the encoders' torsion reverses
-    with their quantisation and the kinematic error's residue, not with
-    the load, and the loop would flip with them."""
-    native = parameters.for_estimator(dict(p, i_delay=0.0))
-    current, theta_m, theta_l = _compliance_inputs(prep, p, sharp)
-    if not sharp:
-        theta_m, theta_l = prep.smoothed("theta_m", theta_m), prep.smoothed("theta_l", theta_l)
-    else:
-        theta_l = theta_l + _loop_free(prep, p, sharp)[1]
-    return prep.per_window(lambda i, tm, tl: _core.compliance(native, i, tm, tl)["hysteresis_torque"],
-                           current, theta_m, theta_l)
+    """The Dahl hysteresis torque of the compliance model, driven by the
+    torsion the compliance model sees (_loop_drive): the C++ model's own
+    Dahl update over that torsion's valid samples, from z = 0 at each
+    window's first (as the model runs it; zero where the torsion is
+    singular). A loop switches over a torsion of H/sigma, a small fraction
+    of an encoder count, so it flips with the torsional vibration: a
+    modelled loop driven through the 6 ms smoothing, which takes that
+    vibration away, does not follow the joint's loop; driven through the
+    transmission's filter, it does."""
+    H, sigma = _get(p, "hys_H"), _get(p, "hys_sigma")
+
+    def loop(drive: np.ndarray) -> np.ndarray:
+        z, valid = np.zeros(len(drive)), np.isfinite(drive)
+        z[valid] = _core.dahl(np.ascontiguousarray(drive[valid]), H, sigma)
+        return z
+    return prep.per_window(loop, _loop_free(prep, p, sharp)[1])
 
 
 # The Dahl loop's own parameters: the loop-free torque and the loop's drive do not read them.
 LOOP_PARAMETERS = ("hys_H", "hys_sigma")
 
 
-def _loop_free(prep: Prepared, p: dict, sharp: bool) -> tuple[np.ndarray, np.ndarray | None]:
-    """The compliance torque without the loop, and (through the transmission's
-    filter) what the loop's drive adds to the link angle, cached by every
-    other parameter: a fit of the loop alone moves neither."""
-    key = (sharp, *(item for item in sorted(p.items()) if item[0] not in LOOP_PARAMETERS))
+def _loop_free(prep: Prepared, p: dict, sharp: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The compliance torque without the loop, and the torsion that drives
+    the loop (NaN where singular), cached by every other parameter they
+    read: a fit of the loop (or of Df) alone moves neither."""
+    key = (sharp, *((n, p.get(n)) for n in _compliance_reads() if n not in LOOP_PARAMETERS))
     cached = prep._loop_free.get(key)
     if cached is None:
-        elastic = _compliance_torque(prep, dict(p, hys_H=0.0), None, sharp)
-        cached = prep._loop_free.put(key, (elastic, _slow_torsion_from_link(prep, p, elastic) if sharp else None))
+        loop_free = dict(p, hys_H=0.0)
+        elastic = _compliance_torque(prep, loop_free, None, sharp)
+        cached = prep._loop_free.put(key, (elastic, _loop_drive(prep, loop_free, sharp, elastic)))
     return cached
+
+
+def _loop_drive(prep: Prepared, p: dict, sharp: bool, elastic: np.ndarray) -> np.ndarray:
+    """The eq. (4) torsion the compliance model drives its loop by (NaN where
+    singular): through the transmission's filter against a torque sensor,
+    else through the kinematics' smoothing. Against a sensor, the torsion's
+    slow part is the link's torque's (_slow_torsion_from_link): where the
+    torque spans a count or two, the encoders' torsion reverses with their
+    quantisation and the kinematic error's residue, not with the load, and
+    the loop would flip with them."""
+    native = parameters.for_estimator(dict(p, i_delay=0.0))
+    current, theta_m, theta_l = _compliance_inputs(prep, p, sharp)
+    if not sharp:
+        theta_m, theta_l = prep.smoothed("theta_m", theta_m), prep.smoothed("theta_l", theta_l)
+    else:
+        theta_l = theta_l + _slow_torsion_from_link(prep, p, elastic)
+
+    def torsion(i, tm, tl):
+        run = _core.compliance(native, i, tm, tl)
+        return np.where(np.isfinite(run["tau_compliance"]), run["dtheta_f"], np.nan)
+    return prep.per_window(torsion, current, theta_m, theta_l)
 
 
 def _slow_torsion_from_link(prep: Prepared, p: dict, elastic: np.ndarray) -> np.ndarray:
@@ -453,6 +472,13 @@ def depends_on(part: str) -> tuple[str, ...]:
     no other parameter changes them)."""
     if part in ("motor", "link"):
         return part_parameters(part)
-    # The hysteresis loop's drive reads the link's torque (_slow_torsion_from_link).
-    own = tuple(n for n, info in parameters.table().items() if info.in_estimator()) + ("Df",)
+    return _compliance_reads() + ("Df",)  # the structural damping: added to the compliance torque
+
+
+@functools.cache
+def _compliance_reads() -> tuple[str, ...]:
+    """What the compliance model and its loop's drive read: the estimator's
+    parameters, and the link's (the drive reads the link's torque,
+    _slow_torsion_from_link)."""
+    own = tuple(n for n, info in parameters.table().items() if info.in_estimator())
     return own + tuple(n for n in part_parameters("link") if n not in own)
