@@ -202,6 +202,17 @@ def _oracle_row(misses: list[dict], oracle: dict[tuple, str]) -> str:
             + (f"; {untested} not retested" if untested else "") + " | - |")
 
 
+def _oracle_multi_row(multi: list[dict], oracle: dict[tuple, str]) -> str:
+    """How many cases of several effects had each effect named, or below what
+    the recording shows beside the others (the oracle cannot show it either)."""
+    def accounted(r):
+        named = {e for f in r["runs"][0]["findings"] for e in f["named"]}
+        return all(e in named or oracle.get((r["case"], r["seed"], e)) == "not detectable" for e in r["present"])
+    return (f"| several effects: each one named, or one the diagnosis's test beside the others, started at the "
+            f"truth's own values, cannot show either (effect_detectability.md) | "
+            f"{_pct(sum(map(accounted, multi)), len(multi))} | - |")
+
+
 def write_table(rows: list[dict], path: Path = TABLE, oracle: dict[tuple, str] | None = None) -> str:
     controls = [run for r in rows if not r["present"] for run in r["runs"]]
     single = [r for r in rows if len(r["present"]) == 1]
@@ -247,6 +258,7 @@ def write_table(rows: list[dict], path: Path = TABLE, oracle: dict[tuple, str] |
         f"| several effects: all named | {_pct(sum(map(named_all, multi)), len(multi))} | all |",
         f"| several effects: each one named, or said `cannot_tell` (too small for this recording) | "
         f"{_pct(sum(map(accounted, multi)), len(multi))} | - |",
+        _oracle_multi_row(multi, oracle),
         f"| closure: corrected set `consistent` on the second recording | "
         f"{_pct(sum(map(closed, closure_rows)), len(closure_rows))}; with every effect named on the first: "
         f"{_pct(len(closed_named), len(closure_rows))} | >= {100 * GOALS['closure']:.0f} % |",
