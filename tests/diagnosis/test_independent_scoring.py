@@ -114,3 +114,14 @@ def test_misses_are_counted_against_the_oracle_retest(tmp_path):
     ]
     text = bench.write_table(rows, tmp_path / "table.md", oracle=bench.load_oracle(oracle_path))
     assert "cannot show either (effect_detectability.md) | 1/3 (33 %); 1 not retested |" in text
+
+
+def test_an_effect_among_several_counts_as_accounted_for_only_where_the_oracle_cannot_show_it(tmp_path):
+    pair = ["cogging", "time_delay"]
+    rows = [row("two", pair, run("missing_physics", {"effect": "cogging"}), seed=0),
+            row("two", pair, run("missing_physics", {"effect": "cogging"}), seed=1),
+            row("two", pair, run("missing_physics", {"effect": "cogging"}, {"effect": "time_delay"}), seed=2)]
+    oracle = {("two", 0, "time_delay"): "not detectable", ("two", 1, "time_delay"): "detectable"}
+    text = bench.write_table(rows, tmp_path / "table.md", oracle=oracle)
+    assert "| several effects: all named | 1/3 (33 %)" in text
+    assert "cannot show either (effect_detectability.md) | 2/3 (67 %)" in text
