@@ -2,6 +2,7 @@
 // against differences, static balance with an unknown link load, state
 // save/restore, recovery from a broken covariance, and the smoother.
 #include <gtest/gtest.h>
+#include <unsupported/Eigen/MatrixFunctions>
 
 #include <cmath>
 #include <limits>
@@ -42,6 +43,77 @@ TEST(JointStateFilter, JacobianMatchesCentralDifferences) {
         for (int r = 0; r < kJointStates; ++r)
             EXPECT_NEAR(J(r, c), fd(r), 1e-5 * (1.0 + std::fabs(fd(r)))) << r << "," << c;
     }
+}
+
+// The step is the zero-order hold of the linearised dynamics, exp(h [[J, f], [0, 0]]),
+// here from Eigen's Pade exponential: at the default stiffness (no squaring),
+// a stiff linear flexspline (squarings) and near zero motor speed (the
+// friction's steep slope). The trapezoidal rule is 1e-3 off.
+TEST(JointStateFilter, StepIsTheExponentialOfTheLinearisedDynamics) {
+    for (const double Kf : {1.0e4, 1.0e7}) {
+        for (const double nu : {0.01, -0.2}) {
+            Parameters p;
+            p.Kf = Kf;
+            if (Kf > 1.0e4) p.Cf = 0.0;  // the kinematic error alone would pass the atan law's asymptote
+            p.wg_load = 1.0;
+            JointSystemModel m;
+            m.p = p;
+            m.h = p.Ts;
+            JointState x;
+            x << 0.3, 0.2, 2.5e-4 * 1.0e4 / Kf, nu, 0.7, 2.0, 0.05, 0.02;
+            const JointInput u{0.4, 0.0, 0.0};
+            JointState dx;
+            JointCovariance J, F;
+            ASSERT_TRUE(m.derivative(x, u, &dx, &J));
+            Eigen::Matrix<double, kJointStates + 1, kJointStates + 1> A;
+            A.setZero();
+            A.topLeftCorner<kJointStates, kJointStates>() = p.Ts * J;
+            A.topRightCorner<kJointStates, 1>() = p.Ts * dx;
+            const Eigen::Matrix<double, kJointStates + 1, kJointStates + 1> E = A.exp();
+            const JointState next = m.step(x, u, &F);
+            for (int r = 0; r < kJointStates; ++r) {
+                EXPECT_NEAR(next(r) - x(r), E(r, kJointStates), 1e-6 * std::fabs(E(r, kJointStates)) + 1e-15)
+                    << "Kf " << Kf << " nu " << nu << " row " << r;
+                for (int c = 0; c < kJointStates; ++c)
+                    EXPECT_NEAR(F(r, c), E(r, c), 1e-6 * std::fabs(E(r, c)) + 1e-15)
+                        << "Kf " << Kf << " nu " << nu << " F(" << r << "," << c << ")";
+            }
+        }
+    }
+}
+
+// A count [0, q) read by a prior N(mean, variance): the reading (z, r) gives
+// the truncated normal's mean and variance, here integrated numerically.
+TEST(JointStateFilter, IntervalReadingHasTheTruncatedNormalsMoments) {
+    const double q = 1.5e-3;
+    for (const double mean : {0.3 * q, -0.2 * q, 1.4 * q}) {
+        for (const double sd : {0.2 * q, 0.6 * q, 2.0 * q}) {
+            const IntervalReading in = interval_reading(0.0, q, mean, sd * sd, 0.0);
+            ASSERT_TRUE(in.valid) << mean << " " << sd;
+            double m0 = 0.0, m1 = 0.0, m2 = 0.0;
+            const int n = 20000;  // Simpson over the count
+            for (int k = 0; k <= n; ++k) {
+                const double y = q * k / n, w = (k == 0 || k == n) ? 1.0 : (k % 2 ? 4.0 : 2.0);
+                const double d = w * std::exp(-0.5 * std::pow((y - mean) / sd, 2));
+                m0 += d;
+                m1 += d * y;
+                m2 += d * y * y;
+            }
+            const double mu = m1 / m0, var = m2 / m0 - mu * mu;
+            ASSERT_TRUE(std::isfinite(in.r)) << mean << " " << sd;
+            const double gain = sd * sd / (sd * sd + in.r);
+            EXPECT_NEAR(mean + gain * (in.z - mean), mu, 1e-9 * q) << mean << " " << sd;
+            EXPECT_NEAR(sd * sd * (1.0 - gain), var, 1e-6 * var) << mean << " " << sd;
+        }
+    }
+    // Well inside the count: nothing learned. Far outside, or far wider than
+    // the count: the white reading. At an edge, a sure prior: the floor.
+    EXPECT_TRUE(interval_reading(0.0, q, 0.5 * q, std::pow(0.01 * q, 2), 0.1).valid);
+    EXPECT_TRUE(std::isinf(interval_reading(0.0, q, 0.5 * q, std::pow(0.01 * q, 2), 0.1).r));
+    EXPECT_FALSE(interval_reading(0.0, q, 3.0 * q, std::pow(0.1 * q, 2), 0.1).valid);
+    EXPECT_FALSE(interval_reading(0.0, q, 0.5 * q, std::pow(20.0 * q, 2), 0.1).valid);
+    EXPECT_FALSE(interval_reading(0.0, 0.0, 0.0, 1.0, 0.1).valid);
+    EXPECT_DOUBLE_EQ(interval_reading(0.0, q, -0.01 * q, std::pow(0.01 * q, 2), 0.1).r, 0.1 * q * q / 12.0);
 }
 
 TEST(JointStateFilter, FindsTheStaticLoadTheLinkModelDoesNotKnow) {
