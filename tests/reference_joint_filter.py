@@ -160,13 +160,12 @@ def joint_filter(p, i_m, theta_m, theta_l):
         if k > 0:  # readings taken off their sample time move along the angles' rates (as documented)
             rates = np.array([p["N"] * (x[1] + x[3]), x[1]])
             R = R + p["jsf_r_time"] ** 2 * np.outer(rates, rates)
-        if k == 0 or not np.any(2 * offset > 0):
+        if k == 0 or not np.any(2 * offset > 0) or p["jsf_r_time"] > 0:
             x, P = kalman_update(x, P, H, z, R)
-        else:  # each encoder in turn, by the interval of its count (the timing term per encoder)
+        else:  # each encoder in turn, by the interval of its count
             for row, low in enumerate((theta_m[k], theta_l[k])):
                 h = H[row:row + 1]
-                extra = max(R0[row, row] - quantisation[row], 0.0) + R[row, row] - R0[row, row] - \
-                    REPEAT_WEIGHT * repeated[k][row] * quantisation[row]
+                extra = max(R0[row, row] - quantisation[row], 0.0)
                 interval = interval_reading(low, 2 * offset[row], (h @ x).item(), (h @ P @ h.T).item() + extra,
                                             p["jsf_r_interval"])
                 if interval is None:

@@ -322,10 +322,11 @@ UnscentedKalmanFilter<kJointStates>::Update<2> JointStateFilter::measure(double 
     const Matrix<2> timing = timing_covariance();
     const double limit = gate(z);
     const double q[2] = {2.0 * offset_m_, 2.0 * offset_l_};
-    if (std::isfinite(limit) || !(q[0] > 0.0 || q[1] > 0.0)) return kalman_.update(measurement_, z, R + timing, limit);
-    // Encoder noise beyond quantisation and the timing term: part of the angle y the interval bounds.
-    const double noise[2] = {std::max(R_(0, 0) - quantisation_m_, 0.0) + timing(0, 0),
-                             std::max(R_(1, 1) - quantisation_l_, 0.0) + timing(1, 1)};
+    // Readings of uncertain time share an error (their common motion): not two independent intervals.
+    if (std::isfinite(limit) || !(q[0] > 0.0 || q[1] > 0.0) || p_.jsf_r_time > 0.0)
+        return kalman_.update(measurement_, z, R + timing, limit);
+    // Encoder noise beyond quantisation: part of the angle y the interval bounds.
+    const double noise[2] = {std::max(R_(0, 0) - quantisation_m_, 0.0), std::max(R_(1, 1) - quantisation_l_, 0.0)};
     const double readings[2] = {theta_m, theta_l};
     UnscentedKalmanFilter<kJointStates>::Update<2> total;
     for (int row = 0; row < 2; ++row) {
@@ -336,7 +337,7 @@ UnscentedKalmanFilter<kJointStates>::Update<2> JointStateFilter::measure(double 
         const IntervalReading in = interval_reading(readings[row], q[row], mean, variance, p_.jsf_r_interval);
         if (in.valid && !std::isfinite(in.r)) continue;  // the count tells nothing the prediction did not
         const auto one = in.valid ? kalman_.update(model, Vector<1>(in.z), Matrix<1>(in.r + noise[row]))
-                                  : kalman_.update(model, Vector<1>(z(row)), Matrix<1>(R(row, row) + timing(row, row)));
+                                  : kalman_.update(model, Vector<1>(z(row)), Matrix<1>(R(row, row)));
         total.status = std::max(total.status, one.status);
         total.innovation(row) = one.innovation(0);
         total.innovation_covariance(row, row) = one.innovation_covariance(0, 0);

@@ -42,7 +42,7 @@
 // angle's normal truncated to it, as a Gaussian reading. Why: the dynamics
 // predict the angle far inside a count, so the white q^2/12 model drowned
 // what a count's edge tells. Where no interval applies (no quantisation, a
-// gross outlier), the reading plus q/2 with variance q^2/12; a reading that
+// gross outlier, jsf_r_time > 0), the reading plus q/2 with variance q^2/12; a reading that
 // repeats the last one k times over has (1 + 0.02 k) q^2/12 (its quantisation
 // error is the same, not a fresh one; kRepeatedReadingWeight).
 // Output: tau(x) and its standard deviation from P.
@@ -312,9 +312,9 @@ private:
     double gate(const Vector<2>& z) const;
     // The update by the readings (z: reading + q/2, R: its white covariance,
     // repeats included): each quantised encoder in turn by its interval
-    // (interval_reading; the timing term per encoder, its cross term dropped);
-    // the white 2-D update, gated, when the gate is on (a gross innovation)
-    // or no encoder is quantised.
+    // (interval_reading); the white 2-D update, gated, when the gate is on (a
+    // gross innovation), no encoder is quantised, or the readings' time is
+    // uncertain (jsf_r_time > 0: their errors are not independent).
     UnscentedKalmanFilter<kJointStates>::Update<2> measure(double theta_m, double theta_l, const Vector<2>& z,
                                                           const Matrix<2>& R);
     JointFilterRecord record_;
