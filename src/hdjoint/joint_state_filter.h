@@ -30,10 +30,8 @@
 // Dahl hysteresis torque z of the filter's own torsion, follow_hysteresis):
 //   Jl*(1 + g)*d(omega_l)/dt = tau - Bl*omega_l - mgl*sin(theta_l) - w
 //   N*Jm*d(omega_l + nu)/dt  = Kt*i_m + cogging - tau_fm(omega_m) - Bm*omega_m - tau/N
-// discretised by the zero-order hold of their linearisation at the sample:
-// F = exp(h J), the step integrates f over the sample through the same
-// exponential (exact for the linear joint with the current held, as the
-// joint is driven; the trapezoidal rule shifted the 54 Hz torsional mode).
+// discretised by the linearly implicit trapezoidal rule (A-stable, keeps the
+// undamped torsional resonance undamped; F = (I - h/2 J)^-1 (I + h/2 J)).
 // Process noise: the current noise (and an unmodelled motor torque) as a
 // piecewise-constant acceleration on nu, random walks on w and r.
 // Measurements: theta_m = N*(theta_l + delta) and theta_l, read by floor

@@ -2,7 +2,6 @@
 // against differences, static balance with an unknown link load, state
 // save/restore, recovery from a broken covariance, and the smoother.
 #include <gtest/gtest.h>
-#include <unsupported/Eigen/MatrixFunctions>
 
 #include <cmath>
 #include <limits>
@@ -42,43 +41,6 @@ TEST(JointStateFilter, JacobianMatchesCentralDifferences) {
         const JointState fd = (dhi - dlo) / (2.0 * steps[c]);
         for (int r = 0; r < kJointStates; ++r)
             EXPECT_NEAR(J(r, c), fd(r), 1e-5 * (1.0 + std::fabs(fd(r)))) << r << "," << c;
-    }
-}
-
-// The step is the zero-order hold of the linearised dynamics, exp(h [[J, f], [0, 0]]),
-// here from Eigen's Pade exponential: at the default stiffness (no squaring),
-// a stiff linear flexspline (squarings) and near zero motor speed (the
-// friction's steep slope). The trapezoidal rule is 1e-3 off.
-TEST(JointStateFilter, StepIsTheExponentialOfTheLinearisedDynamics) {
-    for (const double Kf : {1.0e4, 1.0e7}) {
-        for (const double nu : {0.01, -0.2}) {
-            Parameters p;
-            p.Kf = Kf;
-            if (Kf > 1.0e4) p.Cf = 0.0;  // the kinematic error alone would pass the atan law's asymptote
-            p.wg_load = 1.0;
-            JointSystemModel m;
-            m.p = p;
-            m.h = p.Ts;
-            JointState x;
-            x << 0.3, 0.2, 2.5e-4 * 1.0e4 / Kf, nu, 0.7, 2.0, 0.05, 0.02;
-            const JointInput u{0.4, 0.0, 0.0};
-            JointState dx;
-            JointCovariance J, F;
-            ASSERT_TRUE(m.derivative(x, u, &dx, &J));
-            Eigen::Matrix<double, kJointStates + 1, kJointStates + 1> A;
-            A.setZero();
-            A.topLeftCorner<kJointStates, kJointStates>() = p.Ts * J;
-            A.topRightCorner<kJointStates, 1>() = p.Ts * dx;
-            const Eigen::Matrix<double, kJointStates + 1, kJointStates + 1> E = A.exp();
-            const JointState next = m.step(x, u, &F);
-            for (int r = 0; r < kJointStates; ++r) {
-                EXPECT_NEAR(next(r) - x(r), E(r, kJointStates), 1e-6 * std::fabs(E(r, kJointStates)) + 1e-15)
-                    << "Kf " << Kf << " nu " << nu << " row " << r;
-                for (int c = 0; c < kJointStates; ++c)
-                    EXPECT_NEAR(F(r, c), E(r, c), 1e-6 * std::fabs(E(r, c)) + 1e-15)
-                        << "Kf " << Kf << " nu " << nu << " F(" << r << "," << c << ")";
-            }
-        }
     }
 }
 
