@@ -46,11 +46,11 @@ SPAN_GOAL = 0.02        # tau_hat within 2 % of the run's torque span
 NOMINAL_MARGIN = 1.10   # never worse than the nominal set by more than 10 %
 FAR_OFF_GAIN = 0.70     # where the nominal set is far off: at least 70 % below it
 SETS = ("nominal", "calibrated", "exact")
-# Other rules for the value used, scored on the same calibration (entry: a row of the calibration document).
+# calibrate-from's earlier rules for the value used, scored on the same calibration (entry: a row of its document).
 IDENTIFIED_ONLY = "identified only"   # only identified parameters moved (the first rule)
-EVERY_ESTIMATE = "every estimate"     # the fit's estimate of every parameter
+UNLESS_RULED_OUT = "unless ruled out"  # and those whose interval excludes the nominal value (the second)
 OTHER_RULES = {IDENTIFIED_ONLY: lambda e: e["estimate"] if e["identified"] else e["nominal"],
-               EVERY_ESTIMATE: lambda e: e["estimate"]}
+               UNLESS_RULED_OUT: lambda e: e["estimate"] if e["identified"] or _ruled_out(e) else e["nominal"]}
 COLUMNS = ("nominal", "calibrated", *OTHER_RULES, "exact")
 DURATION = 20.0         # s per recording: a calibration costs about 1.5 min of a shared core
 
@@ -101,6 +101,11 @@ def exact_set(joint) -> dict:
     exact.update({k: float(v) for k, v in joint.truth.items() if k in parameters.table()})
     exact["wg_load"] = 1.0
     return exact
+
+
+def _ruled_out(entry: dict) -> bool:
+    """Whether a calibrated parameter's interval excludes its nominal value."""
+    return "lo" in entry and not entry["lo"] <= entry["nominal"] <= entry["hi"]
 
 
 class Refused(Exception):
@@ -236,9 +241,9 @@ def write_table(rows: list[dict]) -> str:
              *(f"| calibrated (jobs/calibrate.py's rule) against {rule} | {_against(rows, rule)} |"
                for rule in OTHER_RULES), "",
              ("Far off: the nominal set lacks gravity, the flexspline is 2.5x softer, or the link 40 % heavier. "
-              "Calibrated: an unidentified parameter keeps its nominal value unless its interval excludes it; "
+              "Calibrated: every calibrated parameter at its estimate (the maximum a posteriori); "
               "identified only: every unidentified parameter at nominal (the first rule); "
-              "every estimate: the fit's estimate of every calibrated parameter. "
+              "unless ruled out: an unidentified parameter at nominal unless its interval excludes it (the second). "
               "The last column: each parameter the calibration moved, as the value used over the truth's."), "",
              ("| case | seed | excitations (bench, run), load | span (N.m) | " + " | ".join(COLUMNS) + " | "
               "within 2 % | not worse | far off: 70 % below | verdict, findings | moved (used / truth) | s |"),
