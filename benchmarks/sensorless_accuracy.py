@@ -46,11 +46,15 @@ SPAN_GOAL = 0.02        # tau_hat within 2 % of the run's torque span
 NOMINAL_MARGIN = 1.10   # never worse than the nominal set by more than 10 %
 FAR_OFF_GAIN = 0.70     # where the nominal set is far off: at least 70 % below it
 SETS = ("nominal", "calibrated", "exact")
-# calibrate-from's earlier rules for the value used, scored on the same calibration (entry: a row of its document).
+# calibrate-from's earlier rules for the value used, scored on the same calibration (entry: a row of its
+# document; one without "identified" was not calibrated, only scaled: at its estimate, as those rules left it).
 IDENTIFIED_ONLY = "identified only"   # only identified parameters moved (the first rule)
 UNLESS_RULED_OUT = "unless ruled out"  # and those whose interval excludes the nominal value (the second)
-OTHER_RULES = {IDENTIFIED_ONLY: lambda e: e["estimate"] if e["identified"] else e["nominal"],
-               UNLESS_RULED_OUT: lambda e: e["estimate"] if e["identified"] or _ruled_out(e) else e["nominal"]}
+KT_HELD = "Kt held"                   # every estimate, the joint's torque scale left at Kt's nominal value (the third)
+OTHER_RULES = {IDENTIFIED_ONLY: lambda e: e["estimate"] if e.get("identified", True) else e["nominal"],
+               UNLESS_RULED_OUT: lambda e: e["estimate"] if e.get("identified", True) or _ruled_out(e)
+               else e["nominal"],
+               KT_HELD: lambda e: e["estimate"]}
 COLUMNS = ("nominal", "calibrated", *OTHER_RULES, "exact")
 DURATION = 20.0         # s per recording: a calibration costs about 1.5 min of a shared core
 
@@ -174,7 +178,7 @@ def run(job: tuple[str, int], duration: float = DURATION) -> dict:
                   for s in (*SETS, *OTHER_RULES)}
     # Where the calibration put each parameter, beside the truth's value (to tell why it helped or hurt).
     moved = {n: {"nominal": e["nominal"], "estimate": e["estimate"], "lo": e.get("lo"), "hi": e.get("hi"),
-                 "used": e["used"], "identified": e["identified"], "truth": joint.truth.get(n)}
+                 "used": e["used"], "identified": e.get("identified"), "truth": joint.truth.get(n)}
              for n, e in document["parameters"].items() if n != "a0"}
     return {"case": name, "seed": seed, "far_off": case.far_off, "duration": duration,
             "excitations": [s.excitation for s in joint.setups[:2]], "load": joint.setups[1].load,
@@ -241,9 +245,11 @@ def write_table(rows: list[dict]) -> str:
              *(f"| calibrated (jobs/calibrate.py's rule) against {rule} | {_against(rows, rule)} |"
                for rule in OTHER_RULES), "",
              ("Far off: the nominal set lacks gravity, the flexspline is 2.5x softer, or the link 40 % heavier. "
-              "Calibrated: every calibrated parameter at its estimate (the maximum a posteriori); "
+              "Calibrated: every calibrated parameter at its estimate (the maximum a posteriori), the joint's "
+              "torque scale set by all tolerances together (jobs/joint_scale.py); "
               "identified only: every unidentified parameter at nominal (the first rule); "
-              "unless ruled out: an unidentified parameter at nominal unless its interval excludes it (the second). "
+              "unless ruled out: an unidentified parameter at nominal unless its interval excludes it (the second); "
+              "Kt held: every estimate, the scale left at Kt's nominal value (the third). "
               "The last column: each parameter the calibration moved, as the value used over the truth's."), "",
              ("| case | seed | excitations (bench, run), load | span (N.m) | " + " | ".join(COLUMNS) + " | "
               "within 2 % | not worse | far off: 70 % below | verdict, findings | moved (used / truth) | s |"),

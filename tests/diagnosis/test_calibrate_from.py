@@ -1,8 +1,9 @@
 """`hdjoint estimate RUN --calibrate-from BENCH`: the joint calibrated on a
 recording without a torque sensor, then estimated on another recording of
 it. Every calibrated parameter is used at its estimate, those the bench
-recording does not identify alone too, the encoder zero is placed on the
-run, and the calibrated set and its calibration are written beside the estimates."""
+recording does not identify alone too, the torque-carrying ones times the
+joint's torque scale, the encoder zero is placed on the run, and the
+calibrated set and its calibration are written beside the estimates."""
 import dataclasses
 import json
 import sys
@@ -14,6 +15,7 @@ import pytest
 from cli_helpers import run_cli
 from hdjoint.io import parameters
 from hdjoint.io.recording import write_recording
+from hdjoint.jobs.joint_scale import torque_power
 from hdjoint_truth.cases import CONTROL_CASES, draw, record
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
@@ -47,8 +49,10 @@ def test_a_sensorless_calibration_is_used_at_its_estimates(joint_files, capsys):
     used = parameters.load(f / "calibrated.params.json")
     nominal = parameters.load(f / "nominal.json")
     rows = document["parameters"]
-    assert rows and all(r["used"] == r["estimate"] for r in rows.values())
-    assert any(not r["identified"] for r in rows.values())  # without a sensor some cannot be identified alone
+    scale = document["joint_scale"]
+    assert rows and all(r["used"] == pytest.approx(r["estimate"] * scale ** torque_power(n)) for n, r in rows.items())
+    assert rows["Kt"]["estimate"] == nominal["Kt"] and scale != 1.0  # Kt held by the fit, moved by the scale
+    assert any(not r.get("identified", True) for r in rows.values())  # without a sensor some cannot be identified alone
     for name, r in rows.items():
         if name != "a0":
             assert used[name] == pytest.approx(r["used"]), name
@@ -79,7 +83,7 @@ def test_parameters_identified_only_together_keep_their_balance(tmp_path, capsys
     calibrated, exact = (bench._share(tmp_path / f"{s}.csv", truth, span) for s in ("calibrated", "exact"))
     assert calibrated <= bench.SPAN_GOAL and calibrated <= 1.5 * exact, (calibrated, exact)
     rows = json.loads((tmp_path / "calibrated.calibration.json").read_text())["parameters"]
-    assert any(not r["identified"] and r["used"] != r["nominal"] for r in rows.values())
+    assert any(not r.get("identified", True) and r["used"] != r["nominal"] for r in rows.values())
 
 
 def test_a_missing_calibration_recording_is_refused_before_any_work(joint_files, capsys):
