@@ -45,5 +45,8 @@ def joint_scale(calibration: dict, nominal: dict, tolerance: dict[str, float]) -
 
 
 def scaled(params: dict, scale: float) -> dict:
-    """PARAMS with every torque-carrying parameter scaled by SCALE (to its power)."""
-    return {n: v * scale ** torque_power(n) if n in parameters.table() else v for n, v in params.items()}
+    """PARAMS with every torque-carrying parameter scaled by SCALE (to its power),
+    within its range: one at a bound stands for a limit (Kw at its top: no compliance)."""
+    table = parameters.table()
+    return {n: min(max(v * scale ** torque_power(n), table[n].min), table[n].max) if n in table and torque_power(n)
+            else v for n, v in params.items()}
