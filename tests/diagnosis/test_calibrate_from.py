@@ -15,7 +15,7 @@ import pytest
 from cli_helpers import run_cli
 from hdjoint.io import parameters
 from hdjoint.io.recording import write_recording
-from hdjoint.jobs.joint_scale import torque_power
+from hdjoint.jobs.joint_scale import joint_scale, scaled, torque_power
 from hdjoint_truth.cases import CONTROL_CASES, draw, record
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
@@ -96,3 +96,19 @@ def test_a_missing_calibration_recording_is_refused_before_any_work(joint_files,
                            "--calibrate-from", f / "absent.csv", "-o", f / "refused.csv")
     assert code == 2 and "absent.csv" in err and len(err.strip().splitlines()) == 1
     assert not (f / "refused.csv").exists() and not (f / "refused.params.json").exists()
+
+
+def test_the_joint_scale_follows_every_tolerance_within_its_bounds():
+    nominal = {"Kt": 0.045, "Kf": 1.0e4, "mgl": 5.0}
+
+    def entry(name, estimate, std):
+        return {"nominal": nominal[name], "estimate": estimate, "tolerance": std,
+                "z": (estimate - nominal[name]) / std}
+    # mgl 10 % low within its tolerance pulls the scale up from Kt's 1; far beyond it, it is no evidence.
+    within = joint_scale({"mgl": entry("mgl", 4.5, 0.5)}, nominal, {})
+    assert 1.0 < within < 1.1
+    assert joint_scale({"mgl": entry("mgl", 2.0, 0.5)}, nominal, {}) == pytest.approx(1.0, abs=1e-4)
+    assert joint_scale({"Kt": entry("Kt", 0.04, 0.00225)}, nominal, {}) == 1.0  # a sensor set Kt: no free scale
+    # Torque-carrying parameters scale, to their power and within their range; angles do not.
+    assert scaled({"Kf": 1.0e4, "Cf": 0.05, "a0": 0.1, "Kw": 1.0e9}, 1.1) == pytest.approx(
+        {"Kf": 1.1e4, "Cf": 0.05 / 1.1, "a0": 0.1, "Kw": 1.0e9})
