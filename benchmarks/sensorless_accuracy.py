@@ -46,9 +46,16 @@ SPAN_GOAL = 0.02        # tau_hat within 2 % of the run's torque span
 NOMINAL_MARGIN = 1.10   # never worse than the nominal set by more than 10 %
 FAR_OFF_GAIN = 0.70     # where the nominal set is far off: at least 70 % below it
 SETS = ("nominal", "calibrated", "exact")
-# The calibrate stage's earlier rule, for comparison: only identified parameters moved.
-IDENTIFIED_ONLY = "identified only"
-COLUMNS = ("nominal", "calibrated", IDENTIFIED_ONLY, "exact")
+# calibrate-from's earlier rules for the value used, scored on the same calibration (entry: a row of its
+# document; one without "identified" was not calibrated, only scaled: at its estimate, as those rules left it).
+IDENTIFIED_ONLY = "identified only"   # only identified parameters moved (the first rule)
+UNLESS_RULED_OUT = "unless ruled out"  # and those whose interval excludes the nominal value (the second)
+KT_HELD = "Kt held"                   # every estimate, the joint's torque scale left at Kt's nominal value (the third)
+OTHER_RULES = {IDENTIFIED_ONLY: lambda e: e["estimate"] if e.get("identified", True) else e["nominal"],
+               UNLESS_RULED_OUT: lambda e: e["estimate"] if e.get("identified", True) or _ruled_out(e)
+               else e["nominal"],
+               KT_HELD: lambda e: e["estimate"]}
+COLUMNS = ("nominal", "calibrated", *OTHER_RULES, "exact")
 DURATION = 20.0         # s per recording: a calibration costs about 1.5 min of a shared core
 
 
@@ -100,6 +107,11 @@ def exact_set(joint) -> dict:
     return exact
 
 
+def _ruled_out(entry: dict) -> bool:
+    """Whether a calibrated parameter's interval excludes its nominal value."""
+    return "lo" in entry and not entry["lo"] <= entry["nominal"] <= entry["hi"]
+
+
 class Refused(Exception):
     """`hdjoint estimate` refused its input (exit code 2): a result for the row, as a user would get it."""
 
@@ -115,16 +127,15 @@ def _estimate(*args: str) -> None:
         raise RuntimeError(f"hdjoint estimate {' '.join(args)} failed ({code}): {err.getvalue()[-500:]}")
 
 
-def _identified_only(tmp: Path, document: dict) -> None:
-    """tau_hat with the calibrated set but every unidentified parameter at nominal (the earlier rule),
+def _other_rule(tmp: Path, document: dict, rule: str) -> None:
+    """tau_hat with the calibrated set but each calibrated parameter's value chosen by another rule,
     the encoder zero placed anew on the run for that set, as calibrate-from places it."""
     params = parameters.load(tmp / "calibrated.params.json")
     for name, entry in document["parameters"].items():
-        params[name] = entry["estimate"] if entry["identified"] else entry["nominal"]
+        params[name] = OTHER_RULES[rule](entry)
     params = placed_on(read_recording(str(tmp / "run.csv")), params)
-    parameters.save(tmp / "identified_only.json", params)
-    _estimate(str(tmp / "run.csv"), "--params", str(tmp / "identified_only.json"),
-              "-o", str(tmp / f"{IDENTIFIED_ONLY}.csv"))
+    parameters.save(tmp / f"{rule}.json", params)
+    _estimate(str(tmp / "run.csv"), "--params", str(tmp / f"{rule}.json"), "-o", str(tmp / f"{rule}.csv"))
 
 
 def _share(path: Path, truth: np.ndarray, span: float) -> float:
@@ -157,16 +168,17 @@ def run(job: tuple[str, int], duration: float = DURATION) -> dict:
             _estimate(str(tmp / "run.csv"), "--params", str(tmp / "nominal.json"), "--calibrate-from",
                       str(tmp / "bench.csv"), "-o", str(tmp / "calibrated.csv"))
             document = json.loads((tmp / "calibrated.calibration.json").read_text())
-            _identified_only(tmp, document)
+            for rule in OTHER_RULES:
+                _other_rule(tmp, document, rule)
         except Refused as e:  # no calibrated set: the row says why
             document = {"verdict": f"refused: {str(e).replace(str(tmp) + '/', '')}", "findings": [],
                         "parameters": {}}
         calibrating = time.perf_counter() - started
         shares = {s: (round(_share(tmp / f"{s}.csv", truth, span), 5) if (tmp / f"{s}.csv").exists() else None)
-                  for s in (*SETS, IDENTIFIED_ONLY)}
+                  for s in (*SETS, *OTHER_RULES)}
     # Where the calibration put each parameter, beside the truth's value (to tell why it helped or hurt).
     moved = {n: {"nominal": e["nominal"], "estimate": e["estimate"], "lo": e.get("lo"), "hi": e.get("hi"),
-                 "used": e["used"], "identified": e["identified"], "truth": joint.truth.get(n)}
+                 "used": e["used"], "identified": e.get("identified"), "truth": joint.truth.get(n)}
              for n, e in document["parameters"].items() if n != "a0"}
     return {"case": name, "seed": seed, "far_off": case.far_off, "duration": duration,
             "excitations": [s.excitation for s in joint.setups[:2]], "load": joint.setups[1].load,
@@ -197,10 +209,9 @@ def _scored(rows: list[dict], name: str) -> list[float]:
     return [r["shares"][name] for r in rows if r["shares"].get(name) is not None]
 
 
-def _against_earlier_rule(rows: list[dict]) -> str:
-    """How the rule in jobs/calibrate.py compares with moving identified parameters only (more than 10 % apart)."""
-    pairs = [(r["shares"]["calibrated"], r["shares"][IDENTIFIED_ONLY]) for r in rows
-             if r["shares"].get(IDENTIFIED_ONLY) is not None]
+def _against(rows: list[dict], rule: str) -> str:
+    """How the rule in jobs/calibrate.py compares with another rule (more than 10 % apart)."""
+    pairs = [(r["shares"]["calibrated"], r["shares"][rule]) for r in rows if r["shares"].get(rule) is not None]
     better = sum(a < b / NOMINAL_MARGIN for a, b in pairs)
     worse = sum(a > b * NOMINAL_MARGIN for a, b in pairs)
     return f"better on {better}, worse on {worse}, within 10 % on {len(pairs) - better - worse} of {len(pairs)}"
@@ -231,15 +242,18 @@ def write_table(rows: list[dict]) -> str:
              + " / ".join(f"{100 * np.median(_scored(rows, s)):.2f}" for s in COLUMNS) + " |",
              "| worst error: " + " / ".join(COLUMNS) + " (% of span) | "
              + " / ".join(f"{100 * max(_scored(rows, s), default=float('nan')):.2f}" for s in COLUMNS) + " |",
-             "| calibrated (jobs/calibrate.py's rule) against moving identified parameters only | "
-             + f"{_against_earlier_rule(rows)} |", "",
+             *(f"| calibrated (jobs/calibrate.py's rule) against {rule} | {_against(rows, rule)} |"
+               for rule in OTHER_RULES), "",
              ("Far off: the nominal set lacks gravity, the flexspline is 2.5x softer, or the link 40 % heavier. "
-              "Calibrated: an unidentified parameter keeps its nominal value unless its interval excludes it; "
-              "identified only: every unidentified parameter at nominal (the rule before). "
+              "Calibrated: every calibrated parameter at its estimate (the maximum a posteriori), the joint's "
+              "torque scale set by all tolerances together (jobs/joint_scale.py); "
+              "identified only: every unidentified parameter at nominal (the first rule); "
+              "unless ruled out: an unidentified parameter at nominal unless its interval excludes it (the second); "
+              "Kt held: every estimate, the scale left at Kt's nominal value (the third). "
               "The last column: each parameter the calibration moved, as the value used over the truth's."), "",
-             ("| case | seed | excitations (bench, run), load | span (N.m) | nominal | calibrated | identified only | exact | "
+             ("| case | seed | excitations (bench, run), load | span (N.m) | " + " | ".join(COLUMNS) + " | "
               "within 2 % | not worse | far off: 70 % below | verdict, findings | moved (used / truth) | s |"),
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "|---" * (10 + len(COLUMNS)) + "|"]
     mark = {True: "yes", False: "**no**", None: "-"}
     for r in rows:
         s, g = r["shares"], goals(r)

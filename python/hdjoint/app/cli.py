@@ -158,7 +158,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="accept steps more than 20 %% off the median step (the estimator still samples every Ts)")
     p.add_argument("--calibrate-from", nargs="+", metavar="RECORDING",
                    help="first calibrate the joint of --params on these recordings (no torque sensor needed; "
-                        "parameters they do not identify keep their nominal value), then estimate with that set; "
+                        "every parameter at its estimate, the torque scale from all tolerances), then estimate with that set; "
                         "writes OUTPUT's .params.json and .calibration.json beside it")
     p.set_defaults(run=cmd_estimate)
 

@@ -2,17 +2,17 @@
 and current; no torque sensor needed), for the estimators.
 
 The diagnosis calibrates every nominal parameter and names what the model
-lacks. Its corrected set goes to the estimator with one rule: a calibrated
-parameter the recordings do not identify (its posterior not narrower than
-half its prior, `rules.IDENTIFIED_RATIO`) stays at its nominal value unless
-its interval (`rules.INTERVAL`) excludes that value. Without a torque sensor
-the spring's scale and the motor side trade off against each other along a
-direction the data cannot see; a parameter moved along it is a guess, and
-the nominal value is the better one. A nominal value the data rule out is
-no better a guess: a link far heavier than its CAD can leave a posterior
-still wide beside its prior that yet excludes the nominal value. The encoder zero a0 is a
-property of each recording, so it is placed anew on the recording to be
-estimated, against the motor's current-based torque."""
+lacks. Its corrected set, the maximum a posteriori with each parameter's
+tolerance as its prior, goes to the estimator as fitted: the prior already
+holds at its nominal value what the recordings do not see. A parameter they
+do not identify alone (its interval wide) has moved with others along
+combinations they do identify: without a sensor the spring's scale Kf, the
+link's Jl and mgl and the motor's friction are each loosely known, their
+balance well. Set back to its nominal value alone, it breaks that balance,
+and the estimator's torque with it. Their common scale, which the recordings
+cannot tell, is then set by all their tolerances together (joint_scale.py).
+The encoder zero a0 is a property of each recording, so it is placed anew on
+the recording to be estimated, against the motor's current-based torque."""
 from __future__ import annotations
 
 import json
@@ -31,36 +31,31 @@ from hdjoint.io.outputs import check_replaceable, replace_into
 from hdjoint.io.recording import Recording
 from hdjoint.jobs.diagnose import screened_recordings
 from hdjoint.jobs.inputs import UserError, check_output_file, read_params, read_recording
+from hdjoint.jobs.joint_scale import joint_scale, scaled
 
 
 @dataclass(frozen=True)
 class CalibratedSet:
     params: dict          # the set the estimator runs with
-    calibration: dict     # per calibrated parameter: nominal, estimate, interval, identified, and the value used
+    calibration: dict     # per parameter calibrated or scaled: nominal, estimate, interval, identified, the value used
     verdict: str          # the diagnosis's verdict on the calibration recordings
     findings: list[dict]  # what it named: effect, kind, parameters
+    scale: float          # the joint's torque scale applied to the estimates (joint_scale.py)
 
     def document(self, recordings: list[str]) -> dict:
         """The calibration as written beside the estimates (`<output>.calibration.json`)."""
         table = parameters.table()
         return {"calibrated_from": list(recordings), "verdict": self.verdict, "findings": self.findings,
-                "rule": "a parameter the recordings do not identify (posterior std over prior std >= 0.5) "
-                        "keeps its nominal value unless its interval excludes it; a0 is placed on the "
-                        "estimated recording",
+                "rule": "every parameter at its estimate (maximum a posteriori, the tolerance its prior), "
+                        "the torque-carrying ones times the joint's torque scale, the most probable under "
+                        "every tolerance within its bounds and Kt's; a0 is placed on the estimated recording",
+                "joint_scale": self.scale,
                 "parameters": {name: {"description": table[name].description, "unit": table[name].unit, **entry}
                                for name, entry in self.calibration.items()}}
 
 
 def _progress(message: str) -> None:
     print(f"[calibrate] {message}", file=sys.stderr, flush=True)
-
-
-def chosen(entry: dict) -> float:
-    """The value the estimator runs with, from a calibration entry (nominal,
-    estimate, lo, hi, identified): the estimate where the recordings identify
-    the parameter or their interval rules the nominal value out; else the nominal value."""
-    ruled_out = "lo" in entry and not entry["lo"] <= entry["nominal"] <= entry["hi"]
-    return entry["estimate"] if entry["identified"] or ruled_out else entry["nominal"]
 
 
 def calibrate_from(paths: list[str], params_path: str | None, time_unit: str | None = None,
@@ -74,16 +69,17 @@ def calibrate_from(paths: list[str], params_path: str | None, time_unit: str | N
         _, doc = diagnose(recs if len(recs) > 1 else recs[0], nominal, progress=_progress, **statements)
     except (parameters.ParameterError, DiagnosisError) as e:
         raise UserError(str(e)) from None
-    params = dict(doc["params"])
-    table = {}
-    for name, entry in doc["calibration"].items():
-        used = chosen(entry)
-        params[name] = used
-        table[name] = {k: entry[k] for k in ("nominal", "estimate", "lo", "hi", "identified") if k in entry}
-        table[name]["used"] = used
+    estimates = dict(doc["params"], **{name: entry["estimate"] for name, entry in doc["calibration"].items()})
+    scale = joint_scale(doc["calibration"], nominal, statements.get("tolerance") or {})
+    params = scaled(estimates, scale)
+    table = {name: {k: entry[k] for k in ("nominal", "estimate", "lo", "hi", "identified") if k in entry}
+             for name, entry in doc["calibration"].items()}
+    for name in [*table, *(n for n in params if n not in table and params[n] != estimates[n])]:
+        table.setdefault(name, {"nominal": nominal.get(name, estimates[name]), "estimate": estimates[name]})
+        table[name]["used"] = params[name]
     findings = [{"effect": f["effect"], "kind": f["kind"], "parameters": f.get("parameters", {})}
                 for f in doc["findings"]]
-    return CalibratedSet(params, table, doc["verdict"], findings)
+    return CalibratedSet(params, table, doc["verdict"], findings, scale)
 
 
 def placed_on(rec: Recording, params: dict) -> dict:

@@ -1,0 +1,52 @@
+"""The joint's torque scale, which recordings without a torque sensor cannot
+tell: every torque-carrying parameter scaled together (Kt with Kf, the
+inertias, friction, gravity) scales both sides of every channel alike.
+The calibration then holds Kt at its nominal value, which leaves the scale
+to Kt's tolerance alone; yet every calibrated parameter's tolerance is a
+prior on it as well. The scale used is the one all those priors together
+make most probable, leaving out the parameters the recordings moved beyond
+their tolerance (`rules.RESIZE_Z`): there the nominal value is ruled out,
+a CAD or catalogue value far off, and no evidence on the scale."""
+from __future__ import annotations
+
+from scipy.optimize import minimize_scalar
+
+from hdjoint.diagnosis.rules import RESIZE_Z
+from hdjoint.io import parameters
+
+# The power of torque in each unit of the joint's model: inertia times acceleration is a torque.
+TORQUE_POWER = {"N.m": 1, "N.m/A": 1, "N.m/rad": 1, "N.m.s/rad": 1, "kg.m2": 1, "1/(N.m)": -1}
+HELD = "Kt"          # the parameter the calibration holds at nominal without a torque sensor
+SCALE_RANGE = (0.5, 2.0)
+
+
+def torque_power(name: str) -> int:
+    """How a model parameter scales with the joint's torque (0: not at all; estimator settings never)."""
+    info = parameters.table()[name]
+    return TORQUE_POWER.get(info.unit, 0) if info.in_plant() else 0
+
+
+def joint_scale(calibration: dict, nominal: dict, tolerance: dict[str, float]) -> float:
+    """The most probable torque scale under the priors of CALIBRATION's entries
+    (nominal, estimate, tolerance: the prior's std, z) and of the held Kt
+    (its tolerance, or the user's relative one in TOLERANCE). 1 where the
+    calibration fitted Kt itself (a torque sensor sets the scale)."""
+    if HELD in calibration:
+        return 1.0
+    held = nominal.get(HELD, parameters.table()[HELD].default)
+    terms = [(held, held, parameters.table()[HELD].tolerance(held, tolerance.get(HELD)), 1)]
+    terms += [(e["estimate"], e["nominal"], e["tolerance"], torque_power(name)) for name, e in calibration.items()
+              if torque_power(name) and e["nominal"] and e["tolerance"] > 0 and abs(e["z"]) <= RESIZE_Z]
+
+    def cost(s: float) -> float:
+        return sum(((x * s ** power - centre) / std) ** 2 for x, centre, std, power in terms)
+
+    return float(minimize_scalar(cost, bounds=SCALE_RANGE, method="bounded").x)
+
+
+def scaled(params: dict, scale: float) -> dict:
+    """PARAMS with every torque-carrying parameter scaled by SCALE (to its power),
+    within its range: one at a bound stands for a limit (Kw at its top: no compliance)."""
+    table = parameters.table()
+    return {n: min(max(v * scale ** torque_power(n), table[n].min), table[n].max) if n in table and torque_power(n)
+            else v for n, v in params.items()}
