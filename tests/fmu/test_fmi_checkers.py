@@ -5,7 +5,6 @@ checker does find the problem planted in a broken modelDescription, so a
 clean result means something."""
 from __future__ import annotations
 
-import re
 import shutil
 import subprocess
 import zipfile

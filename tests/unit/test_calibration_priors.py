@@ -7,7 +7,7 @@ import pytest
 
 from hdjoint.io import parameters
 from hdjoint.diagnosis.calibration import Calibrated, Prior, priors
-from hdjoint.diagnosis.effects import EFFECTS, calibrated_parameters
+from hdjoint.diagnosis.effects import calibrated_parameters
 from hdjoint.diagnosis.significance import NullNoise, benjamini_hochberg, null_z
 from hdjoint.diagnosis.kinematics import folds
 
