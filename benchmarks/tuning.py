@@ -27,7 +27,6 @@ JOINT_FILTER_GRID = {
     "jsf_q_load_rate": (0.0, 0.1, 0.3, 1.0, 3.0),
     "jsf_q_motor": (0.0, 0.001, 0.003),
     "jsf_q_torque": (1e-4, 3e-4, 1e-3),
-    "jsf_r_interval": (0.03, 0.1, 0.3),
 }
 PAPER_UKF_GRID = {
     "ukf_q_tau": (0.005, 0.01, 0.02, 0.05, 0.1, 0.2),

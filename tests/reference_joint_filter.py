@@ -4,19 +4,16 @@ RTS smoother (tau_hat, tau_smooth), a test oracle for the C++ code.
 Written from the model as documented in joint_state_filter.h and the README
 (state [theta_l, omega_l, delta, nu, w, r, g, e], two-mass dynamics driven by the
 current, linearly implicit trapezoidal step, floor-quantised encoder
-readings taken one encoder after the other as the interval their count bounds),
-not from the C++ sources. Deliberately different in method where
+readings), not from the C++ sources. Deliberately different in method where
 it can be: the Jacobian of the dynamics comes from complex-step
 differentiation (exact to round-off) instead of hand-derived partials, the
-step solves with scipy, the interval's moments come from
-scipy.stats.truncnorm, the update is the textbook Kalman update.
+step solves with scipy, the update is the textbook Kalman update.
 
 Covers the paper's model without the beyond-the-paper terms (the default
 parameter set), as reference_model.py does.
 """
 import numpy as np
 import scipy.linalg
-from scipy.stats import truncnorm
 
 from reference_model import kinematic_error, torque_from_torsion, wave_generator_torsion
 
@@ -91,41 +88,12 @@ def noise(p):
 REPEAT_WEIGHT = 0.02
 
 
-# The interval update (as documented): a prior beyond this many deviations of the interval, or wider
-# than ten counts, is read as white; a posterior variance within 1e-6 of the prior's tells nothing.
-INTERVAL_REACH, UNIFORM_WITHIN, NO_INFORMATION = 6.0, 0.1, 1e-6
-
-
-def interval_reading(low, q, mean, var, floor):
-    """The count [low, low + q) as a Gaussian reading (z, r) of the angle y ~ N(mean, var):
-    None for the white reading, r = inf for no update."""
-    s = np.sqrt(var)
-    a, b = (low - mean) / s, (low + q - mean) / s
-    if q <= 0 or a > INTERVAL_REACH or b < -INTERVAL_REACH or q < UNIFORM_WITHIN * s:
-        return None
-    if a < -INTERVAL_REACH and b > INTERVAL_REACH:
-        return 0.0, np.inf
-    m, v = truncnorm.stats(a, b, moments="mv")
-    information = (1.0 / v - 1.0) / var
-    if not information > NO_INFORMATION / var:
-        return 0.0, np.inf
-    r = max(1.0 / information, floor * q * q / 12.0)
-    return mean + s * float(m) * (var + r) / var, r
-
-
 def repeats(readings):
     """How many readings just before each one are equal to it."""
     count = np.zeros(len(readings))
     for k in range(1, len(readings)):
         count[k] = count[k - 1] + 1 if readings[k] == readings[k - 1] else 0
     return count
-
-
-def kalman_update(x, P, H, z, R):
-    S = H @ P @ H.T + R
-    K = P @ H.T @ np.linalg.inv(S)
-    P = P - K @ S @ K.T
-    return x + K @ (z - H @ x), (P + P.T) / 2
 
 
 def joint_filter(p, i_m, theta_m, theta_l):
@@ -158,18 +126,11 @@ def joint_filter(p, i_m, theta_m, theta_l):
         if k > 0:  # readings taken off their sample time move along the angles' rates (as documented)
             rates = np.array([p["N"] * (x[1] + x[3]), x[1]])
             R = R + p["jsf_r_time"] ** 2 * np.outer(rates, rates)
-        if k == 0 or not np.any(2 * offset > 0) or p["jsf_r_time"] > 0:
-            x, P = kalman_update(x, P, H, z, R)
-        else:  # each encoder in turn, by the interval of its count
-            for row, low in enumerate((theta_m[k], theta_l[k])):
-                h = H[row:row + 1]
-                extra = max(R0[row, row] - quantisation[row], 0.0)
-                interval = interval_reading(low, 2 * offset[row], (h @ x).item(), (h @ P @ h.T).item() + extra,
-                                            p["jsf_r_interval"])
-                if interval is None:
-                    x, P = kalman_update(x, P, h, z[row:row + 1], R[row:row + 1, row:row + 1])
-                elif np.isfinite(interval[1]):
-                    x, P = kalman_update(x, P, h, np.array([interval[0]]), np.array([[interval[1] + extra]]))
+        S = H @ P @ H.T + R
+        K = P @ H.T @ np.linalg.inv(S)
+        x = x + K @ (z - H @ x)
+        P = P - K @ S @ K.T
+        P = (P + P.T) / 2
         store["x"].append(x.copy())
         store["P"].append(P.copy())
         g = torque_gradient(p, x, i_m[k])

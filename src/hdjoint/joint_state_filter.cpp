@@ -18,44 +18,9 @@ constexpr double kMinReadingVariance = 1e-24;
 // torsion rate in rad/s; angles in rad); the first update then sets them.
 constexpr double kP0Angle = 1e-2, kP0Torsion = 1e-3, kP0Speed = 0.1;
 constexpr double kMinTorqueErrorStd = 1e-6;  // N.m
-// interval_reading: a prior this many deviations beyond the interval is a
-// wrong prediction, not a reading to truncate to (the white model takes it);
-// an interval narrower than this share of the prior's deviation holds the
-// angle uniformly (the white q^2/12 reading, without the truncation's
-// round-off); a posterior variance within this share of the prior's tells nothing.
-constexpr double kIntervalReach = 6.0;
-constexpr double kUniformWithin = 0.1;
-constexpr double kNoInformation = 1e-6;
 
 double resolution(double counts) { return counts > 0.0 ? kTwoPi / counts : 0.0; }
-double normal_density(double x) { return 0.3989422804014327 * std::exp(-0.5 * x * x); }
 }  // namespace
-
-IntervalReading interval_reading(double low, double q, double mean, double variance, double floor) {
-    IntervalReading out;
-    if (!(q > 0.0) || !(variance > 0.0)) return out;
-    const double s = std::sqrt(variance);
-    const double a = (low - mean) / s, b = (low + q - mean) / s;
-    if (a > kIntervalReach || b < -kIntervalReach || q < kUniformWithin * s) return out;
-    out.valid = true;
-    out.r = std::numeric_limits<double>::infinity();
-    if (a < -kIntervalReach && b > kIntervalReach) return out;  // well inside: nothing learned
-    // An edge beyond reach has no density and a cdf of 0 or 1 (half the work for a prior near one edge).
-    const double cdf_a = a < -kIntervalReach ? 0.0 : 0.5 * std::erfc(-a * 0.7071067811865476);
-    const double cdf_b = b > kIntervalReach ? 1.0 : 0.5 * std::erfc(-b * 0.7071067811865476);
-    const double mass = cdf_b - cdf_a;
-    if (!(mass > 0.0)) return out;
-    const double pa = a < -kIntervalReach ? 0.0 : normal_density(a), pb = b > kIntervalReach ? 0.0 : normal_density(b);
-    const double shift = (pa - pb) / mass;  // the truncated mean, in deviations from the prior's
-    const double ratio = 1.0 + (a * pa - b * pb) / mass - shift * shift;  // its variance over the prior's
-    const double information = (1.0 / ratio - 1.0) / variance;
-    if (!(information > kNoInformation / variance)) return out;
-    out.r = std::max(1.0 / information, floor * q * q / 12.0);
-    // The reading z whose update with variance r moves the prior's mean by the truncated shift.
-    out.z = mean + s * shift * (variance + out.r) / variance;
-    out.valid = std::isfinite(out.z);
-    return out;
-}
 
 JointTorque joint_state_torque(const JointState& x, const JointInput& in, const Parameters& p) {
     JointTorque t;
@@ -283,35 +248,6 @@ double JointStateFilter::gate(const Vector<2>& z) const {
     return angle > kOutlierAngle ? kOutlierGate : std::numeric_limits<double>::infinity();
 }
 
-UnscentedKalmanFilter<kJointStates>::Update<2> JointStateFilter::measure(double theta_m, double theta_l,
-                                                                        const Vector<2>& z, const Matrix<2>& R) {
-    const Matrix<2> timing = timing_covariance();
-    const double limit = gate(z);
-    const double q[2] = {2.0 * offset_m_, 2.0 * offset_l_};
-    // Readings of uncertain time share an error (their common motion): not two independent intervals.
-    if (std::isfinite(limit) || !(q[0] > 0.0 || q[1] > 0.0) || p_.jsf_r_time > 0.0)
-        return kalman_.update(measurement_, z, R + timing, limit);
-    // Encoder noise beyond quantisation: part of the angle y the interval bounds.
-    const double noise[2] = {std::max(R_(0, 0) - quantisation_m_, 0.0), std::max(R_(1, 1) - quantisation_l_, 0.0)};
-    const double readings[2] = {theta_m, theta_l};
-    UnscentedKalmanFilter<kJointStates>::Update<2> total;
-    for (int row = 0; row < 2; ++row) {
-        const EncoderReadingModel model{measurement_, row};
-        const auto H = model.jacobian();
-        const double mean = model.h(kalman_.state())(0);
-        const double variance = H.lazyProduct(kalman_.covariance()).dot(H) + noise[row];
-        const IntervalReading in = interval_reading(readings[row], q[row], mean, variance, p_.jsf_r_interval);
-        if (in.valid && !std::isfinite(in.r)) continue;  // the count tells nothing the prediction did not
-        const auto one = in.valid ? kalman_.update(model, Vector<1>(in.z), Matrix<1>(in.r + noise[row]))
-                                  : kalman_.update(model, Vector<1>(z(row)), Matrix<1>(R(row, row)));
-        total.status = std::max(total.status, one.status);
-        total.innovation(row) = one.innovation(0);
-        total.innovation_covariance(row, row) = one.innovation_covariance(0, 0);
-        total.nis += one.nis;
-    }
-    return total;
-}
-
 FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointInput& in, double age) {
     using namespace joint_state;
     measurement_.age = std::isfinite(age) ? age : 0.0;
@@ -346,7 +282,7 @@ FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointI
         status = kalman_.predict(system_, previous_, Q);
         record_.x_prior = kalman_.state();
         record_.P_prior = kalman_.covariance();
-        update = readable ? measure(theta_m, theta_l, z, R) : decltype(update){};
+        update = readable ? kalman_.update(measurement_, z, R + timing_covariance(), gate(z)) : decltype(update){};
         if (!readable || update.status == FilterStatus::SampleRejected) {
             // The current held since the last sample may be the outlier:
             // predict again with the last one that passed; if the readings
@@ -357,7 +293,7 @@ FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointI
             status = std::max(status, kalman_.predict(system_, accepted_, Q));
             record_.x_prior = kalman_.state();
             record_.P_prior = kalman_.covariance();
-            if (readable) update = measure(theta_m, theta_l, z, R);
+            if (readable) update = kalman_.update(measurement_, z, R + timing_covariance(), gate(z));
             readings_rejected_ = readable && update.status == FilterStatus::SampleRejected;
             update.nis = rejected_nis;
             update.status = FilterStatus::SampleRejected;

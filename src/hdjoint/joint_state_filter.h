@@ -35,14 +35,9 @@
 // Process noise: the current noise (and an unmodelled motor torque) as a
 // piecewise-constant acceleration on nu, random walks on w and r.
 // Measurements: theta_m = N*(theta_l + delta) and theta_l, read by floor
-// quantisers: a reading a says the angle lies in [a, a + q). Each encoder in
-// turn updates the state by that interval (interval_reading): the predicted
-// angle's normal truncated to it, as a Gaussian reading. Why: the dynamics
-// predict the angle far inside a count, so the white q^2/12 model drowned
-// what a count's edge tells. Where no interval applies (no quantisation, a
-// gross outlier, jsf_r_time > 0), the reading plus q/2 with variance q^2/12; a reading that
-// repeats the last one k times over has (1 + 0.02 k) q^2/12 (its quantisation
-// error is the same, not a fresh one; kRepeatedReadingWeight).
+// quantisers: the reading plus q/2 is unbiased with variance q^2/12; a
+// reading that repeats the last one k times over has (1 + 0.02 k) q^2/12
+// (its quantisation error is the same, not a fresh one; kRepeatedReadingWeight).
 // Output: tau(x) and its standard deviation from P.
 #include <cstddef>
 #include <vector>
@@ -151,33 +146,6 @@ struct JointMeasurementModel {
         return Vector(N * (theta_l + x(kDelta)), theta_l);
     }
 };
-
-// One encoder's reading of the pair (row 0: theta_m, 1: theta_l).
-struct EncoderReadingModel {
-    static constexpr int kSize = 1;
-    static constexpr bool kLinear = true;
-    using Vector = hdjoint::Vector<1>;
-    using Covariance = Matrix<1>;
-    JointMeasurementModel pair;
-    int row = 0;
-
-    Eigen::Matrix<double, 1, kJointStates> jacobian() const { return pair.jacobian().row(row); }
-    Vector h(const JointState& x) const { return Vector(pair.h(x)(row)); }
-};
-
-// A floor quantiser's reading `low` of an angle y ~ N(mean, variance): y lies
-// in [low, low + q). The normal truncated to that interval, moment-matched,
-// as the Gaussian reading (z, r) of y that gives the same posterior; r at
-// least floor*q^2/12 (jsf_r_interval: a prior too narrow, by a model error,
-// would otherwise take one reading for an exact angle). A prior well inside
-// the interval learns nothing (r infinite: no update). Not valid (the white
-// model applies) without quantisation, when the prior lies far outside the
-// interval, or is far wider than it.
-struct IntervalReading {
-    double z = 0.0, r = 0.0;
-    bool valid = false;
-};
-IntervalReading interval_reading(double low, double q, double mean, double variance, double floor);
 
 // One sample of the filter, kept for the smoother.
 struct JointFilterRecord {
@@ -308,13 +276,6 @@ private:
     // The NIS gate for readings z at the predicted state: kOutlierGate, or
     // none when the innovation is below kOutlierAngle.
     double gate(const Vector<2>& z) const;
-    // The update by the readings (z: reading + q/2, R: its white covariance,
-    // repeats included): each quantised encoder in turn by its interval
-    // (interval_reading); the white 2-D update, gated, when the gate is on (a
-    // gross innovation), no encoder is quantised, or the readings' time is
-    // uncertain (jsf_r_time > 0: their errors are not independent).
-    UnscentedKalmanFilter<kJointStates>::Update<2> measure(double theta_m, double theta_l, const Vector<2>& z,
-                                                          const Matrix<2>& R);
     JointFilterRecord record_;
     JointFilterOutput out_;
     bool started_ = false;

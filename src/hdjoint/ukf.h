@@ -57,10 +57,10 @@ public:
                 status = FilterStatus::CovarianceReset;
             }
             x_ = system.step(x_, u, &F_);
-            // Coefficient-wise products: at this size Eigen's blocked GEMM spends more on packing than on sums.
-            const Covariance FP = F_.lazyProduct(P_);
+            Covariance FP;
+            FP.noalias() = F_ * P_;
             P_ = Q;
-            P_.noalias() += FP.lazyProduct(F_.transpose());
+            P_.noalias() += FP * F_.transpose();
             symmetrize(&P_);
             return status;
         }
@@ -115,8 +115,8 @@ public:
                 result.status = FilterStatus::CovarianceReset;
             }
             const Eigen::Matrix<double, NZ, NX> H = model.jacobian();
-            const Eigen::Matrix<double, NX, NZ> Pxz = P_.lazyProduct(H.transpose());
-            Matrix<NZ> Pzz = H.lazyProduct(Pxz) + R;
+            const Eigen::Matrix<double, NX, NZ> Pxz = P_ * H.transpose();
+            Matrix<NZ> Pzz = H * Pxz + R;
             symmetrize(&Pzz);
             result.innovation = z - model.h(x_);
             result.innovation_covariance = Pzz;
@@ -134,7 +134,7 @@ public:
                 solver.solve(Eigen::Matrix<double, NZ, NX>(Pxz.transpose())).transpose();
             x_ += K * result.innovation;
             // Joseph-free form; symmetrised. K Pzz K^T = K Pxz^T.
-            P_ -= K.lazyProduct(Pxz.transpose());
+            P_ -= K * Pxz.transpose();
             symmetrize(&P_);
             return result;
         }

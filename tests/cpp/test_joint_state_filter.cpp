@@ -44,40 +44,6 @@ TEST(JointStateFilter, JacobianMatchesCentralDifferences) {
     }
 }
 
-// A count [0, q) read by a prior N(mean, variance): the reading (z, r) gives
-// the truncated normal's mean and variance, here integrated numerically.
-TEST(JointStateFilter, IntervalReadingHasTheTruncatedNormalsMoments) {
-    const double q = 1.5e-3;
-    for (const double mean : {0.3 * q, -0.2 * q, 1.4 * q}) {
-        for (const double sd : {0.2 * q, 0.6 * q, 2.0 * q}) {
-            const IntervalReading in = interval_reading(0.0, q, mean, sd * sd, 0.0);
-            ASSERT_TRUE(in.valid) << mean << " " << sd;
-            double m0 = 0.0, m1 = 0.0, m2 = 0.0;
-            const int n = 20000;  // Simpson over the count
-            for (int k = 0; k <= n; ++k) {
-                const double y = q * k / n, w = (k == 0 || k == n) ? 1.0 : (k % 2 ? 4.0 : 2.0);
-                const double d = w * std::exp(-0.5 * std::pow((y - mean) / sd, 2));
-                m0 += d;
-                m1 += d * y;
-                m2 += d * y * y;
-            }
-            const double mu = m1 / m0, var = m2 / m0 - mu * mu;
-            ASSERT_TRUE(std::isfinite(in.r)) << mean << " " << sd;
-            const double gain = sd * sd / (sd * sd + in.r);
-            EXPECT_NEAR(mean + gain * (in.z - mean), mu, 1e-9 * q) << mean << " " << sd;
-            EXPECT_NEAR(sd * sd * (1.0 - gain), var, 1e-6 * var) << mean << " " << sd;
-        }
-    }
-    // Well inside the count: nothing learned. Far outside, or far wider than
-    // the count: the white reading. At an edge, a sure prior: the floor.
-    EXPECT_TRUE(interval_reading(0.0, q, 0.5 * q, std::pow(0.01 * q, 2), 0.1).valid);
-    EXPECT_TRUE(std::isinf(interval_reading(0.0, q, 0.5 * q, std::pow(0.01 * q, 2), 0.1).r));
-    EXPECT_FALSE(interval_reading(0.0, q, 3.0 * q, std::pow(0.1 * q, 2), 0.1).valid);
-    EXPECT_FALSE(interval_reading(0.0, q, 0.5 * q, std::pow(20.0 * q, 2), 0.1).valid);
-    EXPECT_FALSE(interval_reading(0.0, 0.0, 0.0, 1.0, 0.1).valid);
-    EXPECT_DOUBLE_EQ(interval_reading(0.0, q, -0.01 * q, std::pow(0.01 * q, 2), 0.1).r, 0.1 * q * q / 12.0);
-}
-
 TEST(JointStateFilter, FindsTheStaticLoadTheLinkModelDoesNotKnow) {
     // The joint at rest holds gravity plus an external torque of 1.5 N.m; the
     // filter's link model knows neither the torque nor the right mgl.
