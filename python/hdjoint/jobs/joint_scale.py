@@ -11,12 +11,12 @@ from __future__ import annotations
 
 from scipy.optimize import minimize_scalar
 
+from hdjoint.diagnosis.effects import HELD_WITHOUT_SENSOR as HELD
 from hdjoint.diagnosis.rules import RESIZE_Z
 from hdjoint.io import parameters
 
 # The power of torque in each unit of the joint's model: inertia times acceleration is a torque.
 TORQUE_POWER = {"N.m": 1, "N.m/A": 1, "N.m/rad": 1, "N.m.s/rad": 1, "kg.m2": 1, "1/(N.m)": -1}
-HELD = "Kt"          # the parameter the calibration holds at nominal without a torque sensor
 SCALE_RANGE = (0.5, 2.0)
 
 

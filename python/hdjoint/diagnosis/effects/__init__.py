@@ -23,6 +23,10 @@ _NOT_EFFECTS = {"base", "needs"}
 # Parameters calibrated whenever their part of the model is fitted: the
 # nominal set has them, and a few percent of error in them must not be
 # mistaken for missing physics.
+# Without a torque sensor only the ratio Kt/Kf is observable: Kt, the joint's
+# torque scale, stays at its nominal value (jobs/joint_scale.py sets the scale after).
+HELD_WITHOUT_SENSOR = "Kt"
+
 ALWAYS_CALIBRATED = {
     "transmission": ("a0", "Kf", "Df"),  # Df: structural damping, which every real flexspline has
     "motor": ("Kt", "Jm"),
@@ -71,7 +75,7 @@ def calibrated_parameters(part: str, nominal: dict, sensor: bool) -> list[str]:
     parameter an effect may resize."""
     names = list(ALWAYS_CALIBRATED[part])
     if part == "motor" and not sensor:
-        names.remove("Kt")  # without a torque sensor only Kt/Kf is observable: Kt is kept
+        names.remove(HELD_WITHOUT_SENSOR)
     for effect in EFFECTS.values():
         if effect.part != part:
             continue
