@@ -60,6 +60,8 @@ def _accept(best: Hypothesis, others: list[Hypothesis], objective, added_names: 
         objective.say(f"{best.effect.id} refused: {best.degenerate}")
         return None
     finding.params_after = refit.params
+    objective.say(f"found {finding.effect.id} ({finding.kind}): held-out gain {100 * best.gain.gain:.1f} %, "
+                  f"p = {best.p_value:.2g}")
     return finding, refit, refitted
 
 
@@ -83,18 +85,14 @@ def select(search: HypothesisSearch, calibration: Calibration) -> Selection:
         tried.sort(key=lambda h: -h.gain.gain)
         last_round = tried
         accepted = [h for h in tried if h.accepted()]
-        chosen = None
-        for best in accepted:
-            chosen = _accept(best, [h for h in tried if h is not best], objective, added_names)
-            if chosen is not None:
-                break
+        # The first accepted hypothesis whose joint refit is physical (_accept marks the others degenerate).
+        chosen = next(((h, made) for h in accepted
+                       if (made := _accept(h, [o for o in tried if o is not h], objective, added_names))), None)
         tested.append([_record(h) for h in tried])
         if chosen is None:
             unconfirmed = [h for h in tried if h.unconfirmed()]
             break
-        finding, refit, refitted = chosen
-        objective.say(f"found {finding.effect.id} ({finding.kind}): held-out gain {100 * best.gain.gain:.1f} %, "
-                      f"p = {best.p_value:.2g}")
+        best, (finding, refit, refitted) = chosen
         findings.append(finding)
         added_names = list(dict.fromkeys(added_names + refitted))
         last_fit = refit
