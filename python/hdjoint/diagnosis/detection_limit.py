@@ -170,6 +170,14 @@ def planted_gains(base: np.ndarray, left: np.ndarray, fold: np.ndarray, test: np
             held_out_gain_sq(after + np.sum(left ** 2, axis=0), after, fold, test))
 
 
+def _anchor_fit(jacobian: np.ndarray, rows) -> tuple[np.ndarray, np.ndarray]:
+    """The anchors' Jacobian (channels x samples x anchors) and its least-squares
+    solve on the fit's rows (lstsq's pseudo-inverse, cut-off and all), made
+    once: every size a limit tries fits its planting by the same columns."""
+    a = jacobian[:, rows, :].reshape(-1, jacobian.shape[2])
+    return jacobian, np.linalg.pinv(a, rcond=np.finfo(float).eps * max(a.shape))
+
+
 class _Planting:
     """One effect planted into the corrected set `p` of a diagnosis at any size."""
 
@@ -182,8 +190,9 @@ class _Planting:
         self.anchors = anchors
         key = (effect.part, tuple(anchors))
         if key not in shared:
-            shared[key] = search.objective.jacobian(p, anchors, self.channels) if anchors else None
-        self.anchor_jacobian = shared[key]
+            shared[key] = _anchor_fit(search.objective.jacobian(p, anchors, self.channels), search.objective.fit_index) \
+                if anchors else (None, None)
+        self.anchor_jacobian, self.anchor_solve = shared[key]
         self.reference = reference_set(effect, p)
         # The null: the effect's own parameters and the anchors, linearised at the reference size.
         slot = planted_slot(effect)
@@ -209,11 +218,9 @@ class _Planting:
         """What calibration would leave of the signature, and the moves of the anchors that take the rest."""
         if self.anchor_jacobian is None:
             return signature, {}
-        rows = self.search.objective.fit_index
-        j = self.anchor_jacobian
-        coef = np.linalg.lstsq(j[:, rows, :].reshape(-1, j.shape[2]), signature[:, rows].ravel(), rcond=None)[0]
+        coef = self.anchor_solve @ signature[:, self.search.objective.fit_index].ravel()
         # The residual base + signature + J @ move is least with move = -coef.
-        return signature - np.einsum("csk,k->cs", j, coef), dict(zip(self.anchors, -coef))
+        return signature - np.einsum("csk,k->cs", self.anchor_jacobian, coef), dict(zip(self.anchors, -coef))
 
     def shown(self, factor: float) -> bool:
         d = self.search
@@ -242,7 +249,7 @@ class _Planting:
         trend, and only when it is most of the residual."""
         d, angle = self.search, self.at[0]
         added = {c.name: left[i] * d.objective.noise_scale(c, self.p) for i, c in enumerate(self.channels)}
-        found = d.order_search(self.p, self.effect.part, self.channels, (angle,), added=added).found
+        found = d.order_search(self.p, self.effect.part, self.channels, (angle,), added=added, every_order=False).found
         return any(o.angle == angle for o in found)
 
 

@@ -58,7 +58,7 @@ class HypothesisSearch:
         self.objective.correlation_length(p)
 
     def order_search(self, p, part: str, channels: list[Channel], angles: tuple[str, ...],
-                     added: dict[str, np.ndarray] | None = None) -> OrderSearch:
+                     added: dict[str, np.ndarray] | None = None, every_order: bool = True) -> OrderSearch:
         """Orders of `angles` the residuals of `channels` carry, strongest first
         (orders the nominal model already has at that angle excluded). Every
         channel of the part is searched: a kinematic error can be most of one
@@ -66,7 +66,8 @@ class HypothesisSearch:
         mismatch broadband in the angle dominates.
         `added`: a residual added to each named channel's (an effect planted
         by detection_limit.py). Returns what passed, and every order tried
-        (for saying why none passed)."""
+        (for saying why none passed; not with `every_order` False, which
+        spares the floors of orders that cannot pass)."""
         added = added or {}
         smoothed = self.objective.prep.kin.smooth if all(c.smoothed() for c in channels) else None
         existing = eq7_orders(p) if part == "transmission" else {}
@@ -84,12 +85,12 @@ class HypothesisSearch:
             # prediction there would count as error (and a fold of rest, 0/0, as a huge loss).
             r = self.objective.shown_residual(channel, p) + added.get(channel.name, 0.0)
             for angle, (values, through, orders, trend) in searched.items():
-                seen = []
+                seen = [] if every_order else None
                 for o in order_search(values, r, self.objective.fold, self.objective.train, self.objective.test, orders, existing.get(angle, ()),
                                       angle, through=through, seen=seen, trend=trend):
                     if (o.angle, o.order) not in found or o.gain.gain > found[o.angle, o.order].gain.gain:
                         found[o.angle, o.order] = replace(o, channel=channel.name)
-                tried += [replace(o, channel=channel.name) for o in seen]
+                tried += [replace(o, channel=channel.name) for o in seen or ()]
         if not found and "theta_l" in searched:
             best, unresolved = self.unresolved_link_order(p, channels, existing.get("theta_l", ()), added)
             return OrderSearch(best, tried + unresolved)

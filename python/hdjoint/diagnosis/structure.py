@@ -283,7 +283,9 @@ def order_search(angle, residual, fold, train, test, orders, exclude=(), name="t
     explains more than DOMINANT_GAIN of the held-out residual. `through`:
     the smoothing filter the residual channel sees the world through;
     `seen`: a list that receives every order evaluated, significant or not;
-    `trend`: columns fitted beside each order (unresolved_trend)."""
+    `trend`: columns fitted beside each order (unresolved_trend). Without
+    `seen`, an order that is not significant has no use for its floor, and
+    its off-orders (three quarters of the cost) are not fitted."""
     ok = np.isfinite(residual)
     res = np.where(ok, residual, 0.0)
     train, test = train & ok, test & ok
@@ -306,10 +308,14 @@ def order_search(angle, residual, fold, train, test, orders, exclude=(), name="t
         # leakage into its off-orders (a sweep visits its angles unevenly) is
         # not broadband structure. Left in, it would hold even a strong ripple
         # under ORDER_PROMINENCE.
+        gain = held_out_gain(res, pred, fold, test)
+        if seen is None and not gain.significant:
+            found.append(Order(name, float(k), amp, gain, float("nan")))
+            continue
         rest = np.where(ok, res - pred, 0.0)
         floor = np.median([np.hypot(*_floor_coefficients(angle, k + d, through, rest, floor_rows, trend)[:2])
                            for d in offsets])
-        found.append(Order(name, float(k), amp, held_out_gain(res, pred, fold, test), amp / max(floor, 1e-300)))
+        found.append(Order(name, float(k), amp, gain, amp / max(floor, 1e-300)))
     if seen is not None:
         seen.extend(found)
     good = [o for o in found if o.gain.significant and (o.prominence > ORDER_PROMINENCE or o.gain.gain > DOMINANT_GAIN)]
