@@ -246,3 +246,24 @@ def _alive(pid: int) -> bool:
             return f.read().split(")")[-1].split()[0] != "Z"  # a zombie has ended
     except FileNotFoundError:
         return False
+
+
+def test_a_deferred_computation_runs_as_the_first_piece_of_a_map_and_only_once():
+    """forked.Deferred: handed to a map, it runs there (in a child, first) and
+    its result comes back with the map's; asked for again, it is not rerun."""
+    def job():
+        runs = []
+        deferred = forked.Deferred(lambda: runs.append(1) or (os.getpid(), "located"))
+        out = forked.map_forked(_pid_and_square, 4, workers=2, beside=deferred)
+        again = forked.map_forked(_pid_and_square, 2, workers=2, beside=deferred)  # done: not a piece again
+        return out, again, deferred.result(), runs
+    status, caller, (out, again, (pid, value), runs) = _in_single_threaded_process(job)
+    assert status == "ok"
+    assert [v for _, v in out] == [0, 1, 4, 9] and [v for _, v in again] == [0, 1]
+    assert value == "located" and pid != caller, "the deferred computation did not run in a child"
+    assert runs == [], "it ran in the caller as well"
+
+
+def test_a_deferred_computation_no_map_took_runs_where_it_is_asked_for():
+    deferred = forked.Deferred(lambda: os.getpid())
+    assert deferred.result() == os.getpid() and deferred.done

@@ -52,7 +52,7 @@ from hdjoint.io import parameters
 from hdjoint.diagnosis.part_torques import torsion_less_kinematic
 from hdjoint.diagnosis.rules import MIN_GAIN, RESIZE_Z, passes
 from hdjoint.diagnosis.effects import Effect, slot_on
-from hdjoint.diagnosis.forked import map_forked
+from hdjoint.diagnosis.forked import Deferred, map_forked
 from hdjoint.diagnosis.significance import null_gain, null_z, p_value
 from hdjoint.diagnosis.structure import held_out_gain_sq
 from hdjoint.diagnosis.torsion_orders import nuisances as torsion_nuisances
@@ -358,13 +358,15 @@ def untold_effects(search, selection, told: set[str] = frozenset()) -> list[Effe
             and not (planted_slot(e) and (slot_on(p, planted_slot(e)[0]) or _moved(search, e, p)))]
 
 
-def detection_limits(search, selection, told: set[str] = frozenset()) -> list[Limit]:
+def detection_limits(search, selection, told: set[str] = frozenset(), beside: Deferred | None = None) -> list[Limit]:
     """The limit of each effect the last round tested and did not accept (an
     effect at angle orders also when its search found no order), nor named
     in a finding (`told`: a resized one, a look-alike); an effect at angle
     orders not when its slot is in use or its terms moved (_moved). The
-    effects side by side in forked processes (forked.py: the same limits)."""
+    effects side by side in forked processes (forked.py: the same limits),
+    `beside` computed with them."""
     p = selection.params
     effects = untold_effects(search, selection, told)
     shared: dict = {}  # in one process, the effects of a part share the anchors' Jacobian
-    return map_forked(lambda i: smallest_shown(search, effects[i], p, shared), len(effects), search.objective.workers)
+    return map_forked(lambda i: smallest_shown(search, effects[i], p, shared), len(effects), search.objective.workers,
+                      beside)

@@ -60,10 +60,35 @@ def _pool(workers: int):
     return multiprocessing.get_context("fork").Pool(workers, initializer=_quiet_on_ctrl_c)
 
 
-def map_forked(piece: Callable[[int], T], count: int, workers: int | None = None) -> list[T]:
+class Deferred:
+    """A computation that needs nothing a map computes: run as one more piece
+    of the first map_forked it is handed to, on a core that map's pieces would
+    leave idle at their end, instead of alone beside an idle core; else
+    where its result is first asked for. The same result either way."""
+
+    def __init__(self, compute: Callable[[], T]):
+        self.compute, self.value, self.done = compute, None, False
+
+    def result(self):
+        if not self.done:
+            self.settle(self.compute())
+        return self.value
+
+    def settle(self, value) -> None:
+        self.value, self.done = value, True
+
+
+def map_forked(piece: Callable[[int], T], count: int, workers: int | None = None,
+               beside: Deferred | None = None) -> list[T]:
     """[piece(0), ..., piece(count - 1)], computed by up to `workers` forked
-    processes (None: one per available core). Results come back pickled."""
+    processes (None: one per available core). Results come back pickled.
+    `beside`, if not yet done, is computed with them, handed out first
+    (the pool hands pieces out in order: a piece started last ends the map late)."""
     global _piece
+    if beside is not None and not beside.done:
+        out = map_forked(lambda i: beside.compute() if i == 0 else piece(i - 1), count + 1, workers)
+        beside.settle(out[0])
+        return out[1:]
     workers = min(count, available_cores() if workers is None else workers)
     if workers <= 1 or not can_fork():
         return [piece(i) for i in range(count)]

@@ -3,11 +3,11 @@ each taking the results of those before it:
 
   prepare    the recordings checked and joined, folds, fit sample, channels (prepare.py)
   calibrate  the nominal model's parameters, MAP with tolerance priors, and the noise (calibrate.py, objective.py)
-  locate     structure in the calibrated residuals (findings.remaining_structure)
+  locate     structure in the calibrated residuals (findings.remaining_structure; beside select's first round)
   select     forward selection over the effects the recording can test (select.py, search.py)
   resize     parameters the nominal model has, needed beyond their tolerance (resize.py)
   limits     the smallest size of each untold effect the recording would show (detection_limit.py)
-  accuracy   each channel's residual against its sensors' floor and the accuracy asked for (floors.py)
+  accuracy   each channel's residual against its sensors' floor and the accuracy asked for (floors.py; beside limits)
   document   findings.json (findings.py), with terms proposed for what no effect explains (open_library.py)
 """
 from __future__ import annotations
@@ -21,6 +21,7 @@ from hdjoint.diagnosis.calibrate import calibrate, calibration_table
 from hdjoint.diagnosis.detection_limit import detection_limits
 from hdjoint.diagnosis.findings import document, remaining_structure
 from hdjoint.diagnosis.floors import accuracy
+from hdjoint.diagnosis.forked import Deferred
 from hdjoint.diagnosis.open_library import propose_terms
 from hdjoint.diagnosis.prepare import prepare
 from hdjoint.diagnosis.resize import released, resized
@@ -55,10 +56,11 @@ def _diagnose(rec, nominal, progress, tolerance, workers, stated_accuracy=None, 
     setup = prepare(rec, nominal, tolerance, progress, workers)
     calibrated = calibrate(setup)
     objective = calibrated.objective
-    setup.say("locating structure in the calibrated model's residuals")
-    located = remaining_structure(objective, calibrated.params)
+    # Structure in the calibrated residuals is located beside the first round of hypotheses, which would
+    # leave a core idle at its end.
+    located = Deferred(lambda: remaining_structure(objective, calibrated.params))
     search = HypothesisSearch(objective, calibrated.current_alignment)
-    selection = select(search, calibrated)
+    selection = select(search, calibrated, beside=located)
     p = selection.params
     calibration = calibration_table(objective, selection.last_fit, p)
     setup.say("checking what remains")
@@ -73,13 +75,14 @@ def _diagnose(rec, nominal, progress, tolerance, workers, stated_accuracy=None, 
     unattributed += gross.unexplained
     if when_settled is not None:
         when_settled(objective, calibrated.params, p, selection.findings + resized_findings)
-    setup.say("measuring the smallest size of each untold effect this recording would show")
+    setup.say("measuring the smallest size of each untold effect this recording would show, and each "
+              "channel's residual against its sensors' floor")
+    size = Deferred(lambda: accuracy(objective, p, selection.not_testable, stated_accuracy, stated_noise))
     limits = detection_limits(search, selection, {e for f in selection.findings + resized_findings
-                                                  for e in f.named()})
-    setup.say("measuring each channel's residual against its sensors' floor")
-    size = accuracy(objective, p, selection.not_testable, stated_accuracy, stated_noise)
+                                                  for e in f.named()}, beside=size)
+    size = size.result()
     result = DiagnosisResult(objective, calibrated, selection, search, selection.findings + resized_findings, calibration,
-                             located, remaining_structure(objective, p) + unconfirmed_structure(selection, objective)
+                             located.result(), remaining_structure(objective, p) + unconfirmed_structure(selection, objective)
                              + unattributed + size.beyond, limits, size)
     doc = document(result)
     if doc["unexplained"]:  # open-library fallback: propose terms for what no named effect explains

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from hdjoint.io.figures import bare_figure, png_data_uri
+from hdjoint.io.figures import bare_figure, envelope, png_data_uri
 
 
 def png_uri(job: tuple) -> str:
@@ -35,11 +35,11 @@ def residual_over_time(ax, t, before, after, segments, title):
     """Both residuals over time. A channel the findings leave unchanged is one curve, labelled so:
     the corrected one drawn over an equal nominal one hid it (a noisy trace shows no dashes)."""
     if np.array_equal(before, after, equal_nan=True):
-        ax.plot(t, before, lw=0.4, color="tab:red", alpha=0.7,
+        ax.plot(*envelope(t, before), lw=0.4, color="tab:red", alpha=0.7,
                 label="calibrated nominal model = corrected model (unchanged here)")
     else:
-        ax.plot(t, before, lw=0.4, color="tab:red", alpha=0.7, label="calibrated nominal model")
-        ax.plot(t, after, lw=0.4, color="tab:blue", alpha=0.8, label="corrected model")
+        ax.plot(*envelope(t, before), lw=0.4, color="tab:red", alpha=0.7, label="calibrated nominal model")
+        ax.plot(*envelope(t, after), lw=0.4, color="tab:blue", alpha=0.8, label="corrected model")
     for a, b in segments:
         ax.axvspan(a, b, color="orange", alpha=0.15, lw=0)
     ax.set_xlabel("time (s)")
@@ -83,8 +83,9 @@ def order_amplitudes(angle, curves, orders) -> list[np.ndarray]:
             continue
         a, ys = angle[ok], np.column_stack([curves[j][ok] for j in group])
         amps = []
-        for k in orders:
-            coef = np.linalg.lstsq(np.column_stack([np.cos(k * a), np.sin(k * a), np.ones(len(a))]), ys, rcond=None)[0]
+        for k in orders:  # by the normal equations: three columns, well conditioned over whole periods
+            basis = np.stack([np.cos(k * a), np.sin(k * a), np.ones(len(a))])
+            coef = np.linalg.solve(basis @ basis.T, basis @ ys)
             amps.append(np.hypot(coef[0], coef[1]))
         for column, j in enumerate(group):
             out[j] = np.array([amp[column] for amp in amps])

@@ -19,7 +19,7 @@ import numpy as np
 
 from hdjoint.diagnosis.channels import TORSION_VIEW, Channel
 from hdjoint.diagnosis.effects import EFFECTS, Effect, slot_on, testable
-from hdjoint.diagnosis.forked import map_forked
+from hdjoint.diagnosis.forked import Deferred, map_forked
 from hdjoint.diagnosis.hypotheses import Hypothesis, delta_bic
 from hdjoint.diagnosis.objective import Objective
 from hdjoint.diagnosis.part_torques import ESTIMATES, torsion_less_kinematic
@@ -279,9 +279,9 @@ class HypothesisSearch:
             return (before,)
         return effect.starts or ({},)
 
-    def try_all(self, candidates: list[Effect], p: dict) -> list[Hypothesis]:
+    def try_all(self, candidates: list[Effect], p: dict, beside: Deferred | None = None) -> list[Hypothesis]:
         """Every candidate's hypothesis, fitted side by side (forked.py): the
-        same results as one after the other."""
+        same results as one after the other. `beside`: computed with them."""
         def piece(i):
             said = len(self.orders_not_found)
             h = self.try_effect(candidates[i], p)
@@ -291,7 +291,7 @@ class HypothesisSearch:
         # The null's noise of each channel set, made once here for every hypothesis (and forked child).
         self.noise.prepare([[self.objective.channels.index(c) for c in self.objective.channels_of(e.part)]
                             for e in candidates])
-        found = map_forked(piece, len(candidates), self.objective.workers)
+        found = map_forked(piece, len(candidates), self.objective.workers, beside)
         for _, notes in found:  # a forked child's notes reach this process only here
             self.orders_not_found += [n for n in notes if n not in self.orders_not_found]
         tried = [replace(h, effect=e) for (h, _), e in zip(found, candidates) if h is not None]

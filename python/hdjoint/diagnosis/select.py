@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from hdjoint.diagnosis.calibrate import Calibration
 from hdjoint.diagnosis.decide import finding_for
 from hdjoint.diagnosis.effects import Effect
+from hdjoint.diagnosis.forked import Deferred
 from hdjoint.diagnosis.hypotheses import Finding, Fit, Hypothesis
 from hdjoint.diagnosis.search import HypothesisSearch
 from hdjoint.diagnosis.significance import benjamini_hochberg
@@ -65,7 +66,8 @@ def _accept(best: Hypothesis, others: list[Hypothesis], objective, added_names: 
     return finding, refit, refitted
 
 
-def select(search: HypothesisSearch, calibration: Calibration) -> Selection:
+def select(search: HypothesisSearch, calibration: Calibration, beside: Deferred | None = None) -> Selection:
+    """`beside`: computed with the first round's hypotheses (forked.Deferred)."""
     objective = search.objective
     p, last_fit = calibration.params, calibration.fit
     candidates = search.testable_effects(p)
@@ -78,7 +80,7 @@ def select(search: HypothesisSearch, calibration: Calibration) -> Selection:
     while candidates:
         objective.say(f"testing {len(candidates)} hypotheses ({', '.join(e.id for e in candidates)})")
         search.start_round(p)
-        tried = search.try_all(candidates, p)
+        tried = search.try_all(candidates, p, beside)
         last_candidates = list(candidates)
         for h, adjusted in zip(tried, benjamini_hochberg([h.p_raw for h in tried])):
             h.p_value = adjusted

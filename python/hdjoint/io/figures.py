@@ -36,6 +36,30 @@ def torque_comparison(time, estimates: dict, title: str = ""):
     return fig
 
 
+# Buckets a trace is reduced to before drawing: two per pixel column of a report's widest axes (900 px).
+ENVELOPE_BUCKETS = 1800
+
+
+def envelope(x: np.ndarray, y: np.ndarray, buckets: int = ENVELOPE_BUCKETS) -> tuple[np.ndarray, np.ndarray]:
+    """A long trace as the lowest and the highest sample of each of `buckets`
+    equal runs of it, in time order: drawn as a line it covers the pixels the
+    whole trace covers, at a fraction of the drawing's cost (an hour at 1 kHz
+    is 3.6 million points). NaN stays a gap; a short trace is returned as is."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    if len(y) <= 2 * buckets:
+        return x, y
+    run = -(-len(y) // buckets)
+    count = -(-len(y) // run)  # every run holds a sample of the trace
+    runs = np.full(count * run, np.nan)
+    runs[:len(y)] = y
+    runs = runs.reshape(count, run)
+    nan = np.isnan(runs)
+    low = np.where(nan, np.inf, runs).argmin(axis=1)  # a run of NaN only: its first sample, NaN, a gap
+    high = np.where(nan, -np.inf, runs).argmax(axis=1)
+    index = (np.arange(count)[:, None] * run + np.sort(np.column_stack([low, high]), axis=1)).ravel()
+    return x[index], y[index]
+
+
 def save(fig, path) -> None:
     fig.savefig(path, dpi=110)
     _pyplot().close(fig)
