@@ -11,8 +11,10 @@
 #include <cmath>
 #include <map>
 #include <optional>
+#include <algorithm>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "hdjoint/compliance_model.h"
@@ -249,21 +251,41 @@ private:
     RtsBackward backward_;
 };
 
+// Samples below which a run is not worth a thread (starting one costs tens of microseconds).
+constexpr std::size_t kSamplesPerThread = 4096;
+
 // The estimator's compliance model, eq. (3)-(8) with the beyond-paper terms,
 // run sample by sample (hysteresis and the current delay carry state; one
-// row is one estimator sample). NaN where the torsion is singular.
+// row is one estimator sample). NaN where the torsion is singular. Without
+// either, each sample stands alone: the run is split over up to `threads`
+// threads, each with its own model, which computes the very same numbers.
 std::map<std::string, OutArray> compliance(const std::map<std::string, double>& values, Array i_m, Array theta_m,
-                                           Array theta_l) {
+                                           Array theta_l, int threads) {
     const std::size_t n = i_m.shape(0);
     check_lengths(n, {theta_m.shape(0), theta_l.shape(0)});
     const Parameters p = parameters_from(values, true, false);
-    ComplianceModel model(p);
     std::vector<double> tau(n), dtheta_f(n), z(n);
-    for (std::size_t j = 0; j < n; ++j) {
-        const ComplianceSample c = model.step(i_m(j), theta_m(j), theta_l(j));
-        tau[j] = c.valid ? c.tau : std::nan("");
-        dtheta_f[j] = c.dtheta_f;
-        z[j] = c.z;
+    auto run = [&](ComplianceModel model, std::size_t begin, std::size_t end) {
+        for (std::size_t j = begin; j < end; ++j) {
+            const ComplianceSample c = model.step(i_m(j), theta_m(j), theta_l(j));
+            tau[j] = c.valid ? c.tau : std::nan("");
+            dtheta_f[j] = c.dtheta_f;
+            z[j] = c.z;
+        }
+    };
+    const ComplianceModel model(p);
+    const bool stateless = !(p.hys_H > 0.0) && delay_samples(p) == 0;
+    const std::size_t pieces =
+        stateless ? std::clamp<std::size_t>(n / kSamplesPerThread, 1, static_cast<std::size_t>(std::max(threads, 1)))
+                  : 1;
+    if (pieces == 1) {
+        run(model, 0, n);
+    } else {
+        nb::gil_scoped_release release;
+        std::vector<std::thread> others;
+        for (std::size_t k = 1; k < pieces; ++k) others.emplace_back(run, model, n * k / pieces, n * (k + 1) / pieces);
+        run(model, 0, n / pieces);
+        for (std::thread& other : others) other.join();
     }
     std::map<std::string, OutArray> out;
     out.emplace("tau_compliance", make_array(std::move(tau)));
@@ -553,8 +575,10 @@ NB_MODULE(_core, m) {
         .def("run", &RtsSmoother::run, nb::arg("records"),
              "tau_smooth and tau_smooth_std of each record of the block (the block just before the last one given).");
     m.def("compliance", &compliance, nb::arg("params"), nb::arg("i_m"), nb::arg("theta_m"), nb::arg("theta_l"),
+          nb::arg("threads") = 1,
           "The estimator's compliance model, eq. (3)-(8) with hysteresis, backlash and the current delay, sample by "
-          "sample: tau_compliance, dtheta_f, hysteresis_torque.");
+          "sample: tau_compliance, dtheta_f, hysteresis_torque. Without a loop or a delay line the run is split over "
+          "up to `threads` threads (the same numbers).");
     m.def("dahl", &dahl, nb::arg("x"), nb::arg("H"), nb::arg("sigma"),
           "Dahl hysteresis torque over a torsion sequence x (z = 0 at x[0]), the model's exact update.");
     m.def("time_estimator", &time_estimator, nb::arg("params"), nb::arg("samples"),

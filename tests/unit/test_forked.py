@@ -267,3 +267,11 @@ def test_a_deferred_computation_runs_as_the_first_piece_of_a_map_and_only_once()
 def test_a_deferred_computation_no_map_took_runs_where_it_is_asked_for():
     deferred = forked.Deferred(lambda: os.getpid())
     assert deferred.result() == os.getpid() and deferred.done
+
+
+def test_only_the_process_of_the_serial_stages_splits_a_run_over_threads():
+    """forked.threads_here: a forked piece's pool already fills the cores."""
+    def job():
+        return forked.threads_here(), forked.map_forked(lambda i: forked.threads_here(), 2, workers=2)
+    status, _, (here, pieces) = _in_single_threaded_process(job)
+    assert status == "ok" and here == forked.available_cores() and pieces == [1, 1]

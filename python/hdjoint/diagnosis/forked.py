@@ -39,8 +39,26 @@ def can_fork() -> bool:
             and threading.active_count() == 1)
 
 
+_in_piece = False  # set in a forked child: the cores are its pool's, one process each
+
+
+def threads_here() -> int:
+    """Threads a computation here may split itself over: every core in the
+    process that runs the diagnosis's serial stages, one in a forked piece
+    (its pool already fills the cores) or where this process may not fork
+    (a Dask worker, one of several sharing the cores)."""
+    return 1 if _in_piece or not can_fork() else available_cores()
+
+
 def _run(index: int):
     return _piece(index)
+
+
+def _start_piece() -> None:
+    """A pool's child: one core's worth of work, and Ctrl-C the parent's to handle."""
+    global _in_piece
+    _in_piece = True
+    _quiet_on_ctrl_c()
 
 
 def _quiet_on_ctrl_c() -> None:
@@ -57,7 +75,7 @@ def _exit_on_sigterm(signum, frame):
 
 
 def _pool(workers: int):
-    return multiprocessing.get_context("fork").Pool(workers, initializer=_quiet_on_ctrl_c)
+    return multiprocessing.get_context("fork").Pool(workers, initializer=_start_piece)
 
 
 class Deferred:

@@ -28,6 +28,7 @@ from hdjoint.io.recording import Recording
 from hdjoint.diagnosis.effects import friction_law_parameters, part_parameters
 from hdjoint.diagnosis.effects.kinematic_error import EFFECT as KINEMATIC_ERROR
 from hdjoint.diagnosis.effects.kinematic_error import KINEMATIC_EQ7
+from hdjoint.diagnosis.forked import threads_here
 from hdjoint.diagnosis.kinematics import Kinematics, _Filter
 
 
@@ -162,7 +163,7 @@ class _TorsionBasis:
         native = parameters.for_estimator(dict(zero, Kw=1e9, hys_H=0.0, backlash=0.0, i_delay=0.0))
         rec = prep.rec
         torsion = np.nan_to_num(prep.per_window(
-            lambda i, tm, tl: _core.compliance(native, i, tm, tl)["dtheta_f"], rec.i_m, rec.theta_m, rec.theta_l))
+            lambda i, tm, tl: _compliance(native, i, tm, tl)["dtheta_f"], rec.i_m, rec.theta_m, rec.theta_l))
         unit = 1e-3  # rad, inside every amplitude's range
         units = [_core.kinematic_error(_native(dict(zero, **{a: unit})), rec.theta_m, rec.theta_l) / unit
                  for a in KINEMATIC_AMPLITUDES[1:]]
@@ -305,7 +306,7 @@ def _loop_drive(prep: Prepared, p: dict, sharp: bool, elastic: np.ndarray) -> np
         theta_l = theta_l + _slow_torsion_from_link(prep, p, elastic)
 
     def torsion(i, tm, tl):
-        run = _core.compliance(native, i, tm, tl)
+        run = _compliance(native, i, tm, tl)
         return np.where(np.isfinite(run["tau_compliance"]), run["dtheta_f"], np.nan)
     return prep.per_window(torsion, current, theta_m, theta_l)
 
@@ -353,9 +354,14 @@ def _compliance_torque(prep: Prepared, p: dict[str, float], index: np.ndarray | 
     current, theta_m, theta_l = _compliance_inputs(prep, p, sharp)
     native = parameters.for_estimator(dict(p, i_delay=0.0))
     if index is not None:
-        return _core.compliance(native, current[index], theta_m[index], theta_l[index])["tau_compliance"]
-    return prep.per_window(lambda i, tm, tl: _core.compliance(native, i, tm, tl)["tau_compliance"],
+        return _compliance(native, current[index], theta_m[index], theta_l[index])["tau_compliance"]
+    return prep.per_window(lambda i, tm, tl: _compliance(native, i, tm, tl)["tau_compliance"],
                            current, theta_m, theta_l)
+
+
+def _compliance(native: dict, current: np.ndarray, theta_m: np.ndarray, theta_l: np.ndarray) -> dict:
+    """The C++ compliance model's run, split over this process's spare cores where it carries no state."""
+    return _core.compliance(native, current, theta_m, theta_l, threads=threads_here())
 
 
 def _native(p: dict[str, float]) -> dict[str, float]:
