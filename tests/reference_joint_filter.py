@@ -68,11 +68,32 @@ def transition(p, x, i_m):
     return x + scipy.linalg.solve(M, h * f), scipy.linalg.solve(M, np.eye(N_STATES) + 0.5 * h * J)
 
 
-def noise(p):
+def motor_noise_shape(p):
+    """G G^T of a motor torque held over a sample, in (omega_l + nu) acceleration per N.m."""
     h = p["Ts"]
-    a = np.hypot(p["Kt"] * p["jsf_current_noise"], p["jsf_q_motor"]) / (p["N"] * p["Jm"])
-    G = np.array([0.0, 0.0, h * h / 2, h, 0.0, 0.0, 0.0, 0.0])
-    Q = a * a * np.outer(G, G)
+    G = np.array([0.0, 0.0, h * h / 2, h, 0.0, 0.0, 0.0, 0.0]) / (p["N"] * p["Jm"])
+    return np.outer(G, G)
+
+
+# Counts of each encoder within which an imbalance at rest is not taken as friction (as documented).
+REST_FRICTION_COUNTS = 1.5
+
+
+def rest_friction_noise(p, x, i_m):
+    """The friction the law misses at rest (jsf_q_stiction): the motor torque the spring's torque leaves
+    unbalanced beyond REST_FRICTION_COUNTS of each encoder, fading as sech^2(omega_m/omega_fc)."""
+    omega_m = p["N"] * (x[1] + x[3])
+    friction = p["Fc"] * np.tanh(omega_m / p["omega_fc"]) + p["Bm"] * omega_m
+    held = p["Kt"] * i_m - friction - (joint_torque(p, x, i_m) - x[7]) / p["N"]
+    g = torque_gradient(p, x, i_m)
+    qm, ql = TWO_PI / p["motor_counts"], TWO_PI / p["link_counts"]
+    hidden = REST_FRICTION_COUNTS * (abs(g[2]) * qm / p["N"] + abs(g[0] - g[2]) * ql)
+    std = p["jsf_q_stiction"] * max(0.0, abs(held) - hidden / p["N"]) / np.cosh(omega_m / p["omega_fc"]) ** 2
+    return std * std * motor_noise_shape(p)
+
+
+def noise(p):
+    Q = (p["Kt"] * p["jsf_current_noise"]) ** 2 * motor_noise_shape(p) + p["jsf_q_motor"] ** 2 * motor_noise_shape(p)
     Q[4, 4] += p["jsf_q_load"] ** 2
     Q[5, 5] += p["jsf_q_load_rate"] ** 2
     Q[6, 6] += Q_INERTIA ** 2
@@ -117,8 +138,9 @@ def joint_filter(p, i_m, theta_m, theta_l):
                          max(p["jsf_q_torque"] / np.sqrt(p["Ts"]), MIN_TORQUE_ERROR_STD) ** 2])
             F = np.eye(N_STATES)
         else:
+            Q_rest = rest_friction_noise(p, x, i_m[k - 1])
             x, F = transition(p, x, i_m[k - 1])
-            P = F @ P @ F.T + Q
+            P = F @ P @ F.T + Q + Q_rest
         store["x_prior"].append(x.copy())
         store["P_prior"].append(P.copy())
         store["F"].append(F)

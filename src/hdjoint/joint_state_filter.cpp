@@ -162,12 +162,15 @@ JointStateFilter::JointStateFilter(const Parameters& p) : p_(p) {
     G(kDelta) = 0.5 * p.Ts * p.Ts;
     G(kNu) = p.Ts;
     Q_ = (a * a) * (G * G.transpose());
+    motor_noise_shape_ = G.segment<2>(kDelta) * G.segment<2>(kDelta).transpose();
     Q_(kLoad, kLoad) = p.jsf_q_load * p.jsf_q_load;
     Q_(kLoadRate, kLoadRate) = p.jsf_q_load_rate * p.jsf_q_load_rate;
     Q_(kInertiaError, kInertiaError) = kQInertiaError * kQInertiaError;
     Q_(kTorqueError, kTorqueError) = p.jsf_q_torque * p.jsf_q_torque;
     // Floor quantisers: reading + q/2 is unbiased, variance q^2/12.
     const double qm = resolution(p.motor_counts), ql = resolution(p.link_counts);
+    resolution_m_ = qm;
+    resolution_l_ = ql;
     offset_m_ = 0.5 * qm;
     offset_l_ = 0.5 * ql;
     R_.setZero();
@@ -201,6 +204,27 @@ JointCovariance JointStateFilter::process_noise() const {
     const double s = std::max(1.0, load_noise_scale_);
     Q(kLoad, kLoad) *= s;
     Q(kLoadRate, kLoadRate) *= s;
+    if (p_.jsf_q_stiction > 0.0) {
+        // The friction the law misses at rest: whatever of the motor torque the
+        // spring's torque does not balance (a stuck rotor's friction holds it),
+        // beyond what kRestFrictionCounts of each encoder hide of the spring's
+        // torque, as a motor torque held over the sample (as the current noise
+        // is), fading with the speed as the law's slope does.
+        const JointState& x = kalman_.state();
+        const JointTorque T = system_.torque(x, previous_);
+        if (T.valid) {
+            const double theta_m = p_.N * (x(kThetaL) + x(kDelta)), omega_m = p_.N * (x(kOmegaL) + x(kNu));
+            const double held = motor_torque(previous_.i_m, theta_m, previous_.t, p_) -
+                                motor_friction(omega_m, p_, friction_drift_scale(previous_.t, p_)) -
+                                (T.tau - x(kTorqueError)) / p_.N;
+            const double hidden = kRestFrictionCounts * (std::fabs(T.d_delta) * resolution_m_ / p_.N +
+                                                         std::fabs(T.d_theta_l - T.d_delta) * resolution_l_);
+            const double c = std::cosh(omega_m / p_.omega_fc);
+            const double a =
+                p_.jsf_q_stiction * std::max(0.0, std::fabs(held) - hidden / p_.N) / (c * c * p_.N * p_.Jm);
+            Q.block<2, 2>(kDelta, kDelta) += (a * a) * motor_noise_shape_;
+        }
+    }
     return Q;
 }
 
