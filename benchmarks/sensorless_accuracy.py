@@ -34,6 +34,7 @@ from hdjoint.io import parameters
 from hdjoint.io.recording import write_recording
 from hdjoint.jobs.calibrate import placed_on
 from hdjoint.jobs.inputs import read_recording
+from hdjoint.jobs.joint_scale import SCALE_EVIDENCE_Z
 from hdjoint_truth.cases import EFFECT_CASES, JITTERED, TruthCase, draw, record
 
 import diagnosis_independent as independent
@@ -246,7 +247,8 @@ def write_table(rows: list[dict]) -> str:
                for rule in OTHER_RULES), "",
              ("Far off: the nominal set lacks gravity, the flexspline is 2.5x softer, or the link 40 % heavier. "
               "Calibrated: every calibrated parameter at its estimate (the maximum a posteriori), the joint's "
-              "torque scale set by all tolerances together (jobs/joint_scale.py); "
+              "torque scale set by all tolerances together, each estimate pulling no harder beyond "
+              f"{SCALE_EVIDENCE_Z:g} tolerances (jobs/joint_scale.py); "
               "identified only: every unidentified parameter at nominal (the first rule); "
               "unless ruled out: an unidentified parameter at nominal unless its interval excludes it (the second); "
               "Kt held: every estimate, the scale left at Kt's nominal value (the third). "

@@ -6,7 +6,12 @@ to Kt's tolerance alone; yet every calibrated parameter's tolerance is a
 prior on it as well. The scale used is the one all those priors together
 make most probable, leaving out the parameters the recordings moved beyond
 their tolerance (`rules.RESIZE_Z`): there the nominal value is ruled out,
-a CAD or catalogue value far off, and no evidence on the scale."""
+a CAD or catalogue value far off, and no evidence on the scale. Within it,
+each prior pulls as a normal one up to SCALE_EVIDENCE_Z tolerances and no
+harder beyond (a Huber loss): an estimate deep in its tolerance's tail
+carries model-form error more likely than the scale (Jm taking up a
+friction law the model lacks), and a normal prior would give it the
+strongest pull of all."""
 from __future__ import annotations
 
 from scipy.optimize import minimize_scalar
@@ -18,6 +23,7 @@ from hdjoint.io import parameters
 # The power of torque in each unit of the joint's model: inertia times acceleration is a torque.
 TORQUE_POWER = {"N.m": 1, "N.m/A": 1, "N.m/rad": 1, "N.m.s/rad": 1, "kg.m2": 1, "1/(N.m)": -1}
 SCALE_RANGE = (0.5, 2.0)
+SCALE_EVIDENCE_Z = 1.5  # tolerances from its nominal value beyond which an estimate pulls the scale no harder
 
 
 def torque_power(name: str) -> int:
@@ -39,9 +45,15 @@ def joint_scale(calibration: dict, nominal: dict, tolerance: dict[str, float]) -
               if torque_power(name) and e["nominal"] and e["tolerance"] > 0 and abs(e["z"]) <= RESIZE_Z]
 
     def cost(s: float) -> float:
-        return sum(((x * s ** power - centre) / std) ** 2 for x, centre, std, power in terms)
+        return sum(_huber((x * s ** power - centre) / std) for x, centre, std, power in terms)
 
     return float(minimize_scalar(cost, bounds=SCALE_RANGE, method="bounded").x)
+
+
+def _huber(z: float) -> float:
+    """z squared up to SCALE_EVIDENCE_Z, then growing linearly with its slope there."""
+    a = abs(z)
+    return z * z if a <= SCALE_EVIDENCE_Z else SCALE_EVIDENCE_Z * (2.0 * a - SCALE_EVIDENCE_Z)
 
 
 def scaled(params: dict, scale: float) -> dict:
