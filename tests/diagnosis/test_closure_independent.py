@@ -66,3 +66,16 @@ def test_cogging_named_on_a_sweep_closes_on_constant_speeds():
     assert corrected["cog_order"] == 6.0
     _, second = diagnose(record(joint, 1), parameters.check(corrected))
     assert second["verdict"] == "consistent", (second["findings"], second["unexplained"])
+
+
+def test_a_joint_with_two_effects_closes_on_a_second_recording():
+    """Several effects at once (issue 38): cogging and a current-sensor lag
+    on one joint. Its corrected set, from a multisine, comes out `consistent`
+    on a sweep of the same joint; nothing the joint lacks is named in their place."""
+    joint = _case("two: cogging + time delay", 1)
+    assert [s.excitation for s in joint.setups] == ["multisine", "sweep"]
+    _, first = diagnose(record(joint, 0), joint.nominal)
+    named = {f["effect"] for f in first["findings"]}
+    assert "cogging" in named and named <= {"cogging", "time_delay"}, first["findings"]
+    _, second = diagnose(record(joint, 1), parameters.check(first["params"]))
+    assert second["verdict"] == "consistent", (second["findings"], second["unexplained"])
