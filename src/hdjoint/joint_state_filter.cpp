@@ -169,8 +169,6 @@ JointStateFilter::JointStateFilter(const Parameters& p) : p_(p) {
     Q_(kTorqueError, kTorqueError) = p.jsf_q_torque * p.jsf_q_torque;
     // Floor quantisers: reading + q/2 is unbiased, variance q^2/12.
     const double qm = resolution(p.motor_counts), ql = resolution(p.link_counts);
-    resolution_m_ = qm;
-    resolution_l_ = ql;
     offset_m_ = 0.5 * qm;
     offset_l_ = 0.5 * ql;
     R_.setZero();
@@ -217,8 +215,9 @@ JointCovariance JointStateFilter::process_noise() const {
             const double held = motor_torque(previous_.i_m, theta_m, previous_.t, p_) -
                                 motor_friction(omega_m, p_, friction_drift_scale(previous_.t, p_)) -
                                 (T.tau - x(kTorqueError)) / p_.N;
-            const double hidden = kRestFrictionCounts * (std::fabs(T.d_delta) * resolution_m_ / p_.N +
-                                                         std::fabs(T.d_theta_l - T.d_delta) * resolution_l_);
+            // A count is twice the quantiser's offset.
+            const double hidden = kRestFrictionCounts * (std::fabs(T.d_delta) * 2.0 * offset_m_ / p_.N +
+                                                         std::fabs(T.d_theta_l - T.d_delta) * 2.0 * offset_l_);
             const double c = std::cosh(omega_m / p_.omega_fc);
             const double a =
                 p_.jsf_q_stiction * std::max(0.0, std::fabs(held) - hidden / p_.N) / (c * c * p_.N * p_.Jm);

@@ -256,7 +256,6 @@ private:
     Matrix<2> motor_noise_shape_ = Matrix<2>::Zero();
     Matrix<2> R_ = Matrix<2>::Identity();
     double offset_m_ = 0.0, offset_l_ = 0.0;  // q/2 of the floor quantisers
-    double resolution_m_ = 0.0, resolution_l_ = 0.0;  // q of each encoder, rad
     // The generic filter in its extended mode (kExtended: analytic Jacobian,
     // no sigma points are drawn).
     UnscentedKalmanFilter<kJointStates> kalman_;
