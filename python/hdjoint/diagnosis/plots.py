@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from hdjoint.diagnosis.structure import harmonic_amplitude
 from hdjoint.io.figures import bare_figure, envelope, png_data_uri
 
 
@@ -82,11 +83,7 @@ def order_amplitudes(angle, curves, orders) -> list[np.ndarray]:
         if not group:
             continue
         a, ys = angle[ok], np.column_stack([curves[j][ok] for j in group])
-        amps = []
-        for k in orders:  # by the normal equations: three columns, well conditioned over whole periods
-            basis = np.stack([np.cos(k * a), np.sin(k * a), np.ones(len(a))])
-            coef = np.linalg.solve(basis @ basis.T, basis @ ys)
-            amps.append(np.hypot(coef[0], coef[1]))
+        amps = [harmonic_amplitude(a, ys, k) for k in orders]
         for column, j in enumerate(group):
             out[j] = np.array([amp[column] for amp in amps])
     return out

@@ -249,6 +249,13 @@ def _harmonic_coefficients(basis, residual, rows):
     return np.linalg.solve(fit @ fit.T, fit @ residual[rows])
 
 
+def harmonic_amplitude(angle, values, order: float) -> np.ndarray:
+    """The amplitude of `order` x `angle` in `values` (a sample, or columns of
+    them), fitted by least squares with a constant."""
+    coef = _harmonic_coefficients(_basis(angle, order, None), values, slice(None))
+    return np.hypot(coef[0], coef[1])
+
+
 def _floor_coefficients(angle, order, through, residual, rows, trend=None):
     """_harmonic_coefficients at an off-order, on `rows`: without a filter the
     basis is needed there only (the same numbers, a fraction of the cost)."""

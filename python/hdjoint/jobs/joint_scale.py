@@ -15,6 +15,7 @@ strongest pull of all."""
 from __future__ import annotations
 
 from scipy.optimize import minimize_scalar
+from scipy.special import huber
 
 from hdjoint.diagnosis.effects import HELD_WITHOUT_SENSOR as HELD
 from hdjoint.diagnosis.rules import RESIZE_Z
@@ -44,16 +45,10 @@ def joint_scale(calibration: dict, nominal: dict, tolerance: dict[str, float]) -
     terms += [(e["estimate"], e["nominal"], e["tolerance"], torque_power(name)) for name, e in calibration.items()
               if torque_power(name) and e["nominal"] and e["tolerance"] > 0 and abs(e["z"]) <= RESIZE_Z]
 
-    def cost(s: float) -> float:
-        return sum(_huber((x * s ** power - centre) / std) for x, centre, std, power in terms)
+    def cost(s: float) -> float:  # z^2/2 up to SCALE_EVIDENCE_Z, then linear with its slope there
+        return sum(huber(SCALE_EVIDENCE_Z, (x * s ** power - centre) / std) for x, centre, std, power in terms)
 
     return float(minimize_scalar(cost, bounds=SCALE_RANGE, method="bounded").x)
-
-
-def _huber(z: float) -> float:
-    """z squared up to SCALE_EVIDENCE_Z, then growing linearly with its slope there."""
-    a = abs(z)
-    return z * z if a <= SCALE_EVIDENCE_Z else SCALE_EVIDENCE_Z * (2.0 * a - SCALE_EVIDENCE_Z)
 
 
 def scaled(params: dict, scale: float) -> dict:
