@@ -58,6 +58,7 @@ def test_a_sensorless_calibration_is_used_at_its_estimates(joint_files, capsys):
             assert used[name] == pytest.approx(r["used"]), name
     assert used["a0"] != nominal["a0"]  # placed on the run
     assert all(r["unit"] is not None and r["description"] for r in rows.values())
+    assert f"no harder beyond {SCALE_EVIDENCE_Z:g} tolerances" in document["rule"]  # the rule says the scale's cap
     # Never worse than the nominal set (within 10 %) on the other recording.
     assert _tau_hat_rms(f / "calibrated.csv", f / "run.csv") <= 1.1 * _tau_hat_rms(f / "nominal.csv", f / "run.csv")
 

@@ -31,7 +31,7 @@ from hdjoint.io.outputs import check_replaceable, replace_into
 from hdjoint.io.recording import Recording
 from hdjoint.jobs.diagnose import screened_recordings
 from hdjoint.jobs.inputs import UserError, check_output_file, read_params, read_recording
-from hdjoint.jobs.joint_scale import joint_scale, scaled
+from hdjoint.jobs.joint_scale import SCALE_EVIDENCE_Z, joint_scale, scaled
 
 
 @dataclass(frozen=True)
@@ -48,7 +48,8 @@ class CalibratedSet:
         return {"calibrated_from": list(recordings), "verdict": self.verdict, "findings": self.findings,
                 "rule": "every parameter at its estimate (maximum a posteriori, the tolerance its prior), "
                         "the torque-carrying ones times the joint's torque scale, the most probable under "
-                        "every tolerance within its bounds and Kt's; a0 is placed on the estimated recording",
+                        "every tolerance within its bounds and Kt's, an estimate pulling no harder beyond "
+                        f"{SCALE_EVIDENCE_Z:g} tolerances; a0 is placed on the estimated recording",
                 "joint_scale": self.scale,
                 "parameters": {name: {"description": table[name].description, "unit": table[name].unit, **entry}
                                for name, entry in self.calibration.items()}}
