@@ -7,11 +7,11 @@
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/vector.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <map>
 #include <optional>
-#include <algorithm>
 #include <stdexcept>
 #include <string>
 #include <thread>
