@@ -92,6 +92,13 @@ def rest_friction_noise(p, x, i_m):
     return std * std * motor_noise_shape(p)
 
 
+def averaged_friction(p, P):
+    """The parameters with the Coulomb law the prediction uses: tanh(w/a) averaged over the motor speed's
+    spread in P, a Gaussian: the law with a^2 + (pi/2) Var(omega_m) (as documented)."""
+    var_omega_m = p["N"] ** 2 * max(0.0, P[1, 1] + 2 * P[1, 3] + P[3, 3])
+    return {**p, "omega_fc": np.sqrt(p["omega_fc"] ** 2 + np.pi / 2 * var_omega_m)}
+
+
 def noise(p):
     Q = (p["Kt"] * p["jsf_current_noise"]) ** 2 * motor_noise_shape(p) + p["jsf_q_motor"] ** 2 * motor_noise_shape(p)
     Q[4, 4] += p["jsf_q_load"] ** 2
@@ -138,8 +145,9 @@ def joint_filter(p, i_m, theta_m, theta_l):
                          max(p["jsf_q_torque"] / np.sqrt(p["Ts"]), MIN_TORQUE_ERROR_STD) ** 2])
             F = np.eye(N_STATES)
         else:
-            Q_rest = rest_friction_noise(p, x, i_m[k - 1])
-            x, F = transition(p, x, i_m[k - 1])
+            averaged = averaged_friction(p, P)
+            Q_rest = rest_friction_noise(averaged, x, i_m[k - 1])
+            x, F = transition(averaged, x, i_m[k - 1])
             P = F @ P @ F.T + Q + Q_rest
         store["x_prior"].append(x.copy())
         store["P_prior"].append(P.copy())

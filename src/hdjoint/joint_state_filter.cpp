@@ -212,19 +212,31 @@ JointCovariance JointStateFilter::process_noise() const {
         const JointTorque T = system_.torque(x, previous_);
         if (T.valid) {
             const double theta_m = p_.N * (x(kThetaL) + x(kDelta)), omega_m = p_.N * (x(kOmegaL) + x(kNu));
+            const Parameters& q = system_.p;  // the friction law as the prediction averages it
             const double held = motor_torque(previous_.i_m, theta_m, previous_.t, p_) -
-                                motor_friction(omega_m, p_, friction_drift_scale(previous_.t, p_)) -
+                                motor_friction(omega_m, q, friction_drift_scale(previous_.t, p_)) -
                                 (T.tau - x(kTorqueError)) / p_.N;
             // A count is twice the quantiser's offset.
             const double hidden = kRestFrictionCounts * (std::fabs(T.d_delta) * 2.0 * offset_m_ / p_.N +
                                                          std::fabs(T.d_theta_l - T.d_delta) * 2.0 * offset_l_);
-            const double c = std::cosh(omega_m / p_.omega_fc);
+            const double c = std::cosh(omega_m / q.omega_fc);
             const double a =
                 p_.jsf_q_stiction * std::max(0.0, std::fabs(held) - hidden / p_.N) / (c * c * p_.N * p_.Jm);
             Q.block<2, 2>(kDelta, kDelta) += (a * a) * motor_noise_shape_;
         }
     }
     return Q;
+}
+
+void JointStateFilter::average_friction_over_speed() {
+    // tanh(w/a) is erf(sqrt(pi) w / (2a)) to within 2 %, and the mean of that
+    // over w ~ N(mu, s^2) is the same law of mu with a^2 + (pi/2) s^2.
+    using namespace joint_state;
+    const JointCovariance& P = kalman_.covariance();
+    const double var_omega_m =
+        p_.N * p_.N * std::max(0.0, P(kOmegaL, kOmegaL) + 2.0 * P(kOmegaL, kNu) + P(kNu, kNu));
+    constexpr double kHalfPi = 1.57079632679489661923;
+    system_.p.omega_fc = std::sqrt(p_.omega_fc * p_.omega_fc + kHalfPi * var_omega_m);
 }
 
 double JointStateFilter::torque_variance(const JointTorque& T, const JointCovariance& P) {
@@ -301,6 +313,7 @@ FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointI
         // copy of the whole filter, its P0 and weights, cost a tenth of a step).
         const JointState x_before = kalman_.state();
         const JointCovariance P_before = kalman_.covariance();
+        average_friction_over_speed();
         const JointCovariance Q = process_noise();
         status = kalman_.predict(system_, previous_, Q);
         record_.x_prior = kalman_.state();
@@ -374,6 +387,7 @@ void JointStateFilter::predict_without_reading(const JointInput& in) {
     using namespace joint_state;
     if (!started_) return;
     samples_held_ += 1.0;
+    average_friction_over_speed();
     JointCovariance Q = process_noise();
     const double a = p_.Kt * samples_held_ * current_change_ / (p_.N * p_.Jm);
     Q(kDelta, kDelta) += a * a * std::pow(0.5 * p_.Ts * p_.Ts, 2);

