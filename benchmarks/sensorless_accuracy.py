@@ -13,7 +13,7 @@ recording (jobs/calibrate.py), (c) the exact set: the truth's values of
 every parameter the model has. The error is tau_hat's RMS against the
 truth's transmitted torque, as a share of the run's torque span.
 
-Run: python benchmarks/sensorless_accuracy.py [--seeds 3] [--first-seed 0] [--cases TEXT] [--table-only]
+Run: python benchmarks/sensorless_accuracy.py [--seeds 3] [--first-seed 0] [--cases TEXT] [--table-only] [--rescore]
 writes docs/results/sensorless_accuracy.md (and .jsonl, the raw rows; resumable)."""
 from __future__ import annotations
 
@@ -21,6 +21,7 @@ import argparse
 import contextlib
 import io
 import json
+import multiprocessing
 import tempfile
 import time
 from dataclasses import dataclass, field, replace
@@ -146,6 +147,56 @@ def _share(path: Path, truth: np.ndarray, span: float) -> float:
     return float(np.sqrt(np.mean((tau_hat - truth) ** 2)) / span)
 
 
+def _scored_sets(tmp: Path, joint, run_rec, calibrate) -> tuple[dict, dict, float]:
+    """Each set's tau_hat share on the run (nominal, exact; calibrated by `calibrate(tmp)`, which writes
+    calibrated.csv and returns the calibration document; the other rules on it), and the seconds calibrating took."""
+    truth = run_rec.extra["tau_joint"]
+    span = float(np.ptp(truth))
+    write_recording(tmp / "run.csv", replace(run_rec, extra={}))  # what a drive logs: no truth columns
+    parameters.save(tmp / "nominal.json", joint.nominal)
+    parameters.save(tmp / "exact.json", exact_set(joint))
+    _estimate(str(tmp / "run.csv"), "--params", str(tmp / "nominal.json"), "-o", str(tmp / "nominal.csv"))
+    _estimate(str(tmp / "run.csv"), "--params", str(tmp / "exact.json"), "-o", str(tmp / "exact.csv"))
+    started = time.perf_counter()
+    try:
+        document = calibrate(tmp)
+        for rule in OTHER_RULES:
+            _other_rule(tmp, document, rule)
+    except Refused as e:  # no calibrated set: the row says why
+        document = {"verdict": f"refused: {str(e).replace(str(tmp) + '/', '')}", "findings": [],
+                    "parameters": {}}
+    calibrating = time.perf_counter() - started
+    shares = {s: (round(_share(tmp / f"{s}.csv", truth, span), 5) if (tmp / f"{s}.csv").exists() else None)
+              for s in (*SETS, *OTHER_RULES)}
+    return shares, document, calibrating
+
+
+def rescore(row: dict) -> dict:
+    """ROW's estimates anew with the calibrated set it recorded (each calibrated parameter at its value used,
+    the rest nominal, the encoder zero placed on the run, as calibrate-from writes it): for a change of the
+    estimator that leaves the calibration as it was. The row keeps its calibration's engine."""
+    case = next(c for c in CASES if c.truth.name == row["case"])
+    joint = joint_for(case, row["seed"], row["duration"])
+    run_rec = replace(record(joint, 1), tau_sensor=None)
+
+    def recorded_calibration(tmp: Path) -> dict:
+        if not row["parameters"]:
+            raise Refused(row["verdict"])
+        params = {**joint.nominal, **{n: e["used"] for n, e in row["parameters"].items()}}
+        params = placed_on(read_recording(str(tmp / "run.csv")), params)
+        parameters.save(tmp / "calibrated.params.json", params)
+        _estimate(str(tmp / "run.csv"), "--params", str(tmp / "calibrated.params.json"), "-o",
+                  str(tmp / "calibrated.csv"))
+        # As the calibration document has them: a figure it did not give (None in the row) left out.
+        return {"parameters": {n: {k: v for k, v in e.items() if v is not None}
+                               for n, e in row["parameters"].items()}}
+
+    with tempfile.TemporaryDirectory(prefix="hdjoint-sensorless-") as tmp, \
+            threadpool_limits(limits=1, user_api="blas"):
+        shares, _, _ = _scored_sets(Path(tmp), joint, run_rec, recorded_calibration)
+    return {**row, "shares": shares, "estimates_engine": stamp.engine()}
+
+
 def run(job: tuple[str, int], duration: float = DURATION) -> dict:
     name, seed = job
     case = next(c for c in CASES if c.truth.name == name)
@@ -153,30 +204,17 @@ def run(job: tuple[str, int], duration: float = DURATION) -> dict:
     started = time.perf_counter()
     bench, run_rec = (replace(record(joint, i), tau_sensor=None) for i in (0, 1))
     simulated = time.perf_counter() - started
-    truth = run_rec.extra["tau_joint"]
-    span = float(np.ptp(truth))
+    span = float(np.ptp(run_rec.extra["tau_joint"]))
+
+    def calibrate_from_bench(tmp: Path) -> dict:
+        write_recording(tmp / "bench.csv", replace(bench, extra={}))
+        _estimate(str(tmp / "run.csv"), "--params", str(tmp / "nominal.json"), "--calibrate-from",
+                  str(tmp / "bench.csv"), "-o", str(tmp / "calibrated.csv"))
+        return json.loads((tmp / "calibrated.calibration.json").read_text())
+
     with tempfile.TemporaryDirectory(prefix="hdjoint-sensorless-") as tmp, \
             threadpool_limits(limits=1, user_api="blas"):
-        tmp = Path(tmp)
-        write_recording(tmp / "bench.csv", replace(bench, extra={}))  # what a drive logs: no truth columns
-        write_recording(tmp / "run.csv", replace(run_rec, extra={}))
-        parameters.save(tmp / "nominal.json", joint.nominal)
-        parameters.save(tmp / "exact.json", exact_set(joint))
-        _estimate(str(tmp / "run.csv"), "--params", str(tmp / "nominal.json"), "-o", str(tmp / "nominal.csv"))
-        _estimate(str(tmp / "run.csv"), "--params", str(tmp / "exact.json"), "-o", str(tmp / "exact.csv"))
-        started = time.perf_counter()
-        try:
-            _estimate(str(tmp / "run.csv"), "--params", str(tmp / "nominal.json"), "--calibrate-from",
-                      str(tmp / "bench.csv"), "-o", str(tmp / "calibrated.csv"))
-            document = json.loads((tmp / "calibrated.calibration.json").read_text())
-            for rule in OTHER_RULES:
-                _other_rule(tmp, document, rule)
-        except Refused as e:  # no calibrated set: the row says why
-            document = {"verdict": f"refused: {str(e).replace(str(tmp) + '/', '')}", "findings": [],
-                        "parameters": {}}
-        calibrating = time.perf_counter() - started
-        shares = {s: (round(_share(tmp / f"{s}.csv", truth, span), 5) if (tmp / f"{s}.csv").exists() else None)
-                  for s in (*SETS, *OTHER_RULES)}
+        shares, document, calibrating = _scored_sets(Path(tmp), joint, run_rec, calibrate_from_bench)
     # Where the calibration put each parameter, beside the truth's value (to tell why it helped or hurt).
     moved = {n: {"nominal": e["nominal"], "estimate": e["estimate"], "lo": e.get("lo"), "hi": e.get("hi"),
                  "used": e["used"], "identified": e.get("identified"), "truth": joint.truth.get(n)}
@@ -227,7 +265,10 @@ def write_table(rows: list[dict]) -> str:
     durations = ", ".join(sorted({f"{r['duration']:g}" for r in rows}))
     lines = ["# tau_hat after a sensorless calibration, on the independent truth", "",
              stamp.generated_by("python benchmarks/sensorless_accuracy.py"),
-             (f"Engine: {', '.join(sorted({r['engine'] for r in rows}))}. Seeds "
+             (f"Engine: {', '.join(sorted({r['engine'] for r in rows}))}"
+              + "".join(f", estimates rescored on {e} with the same calibrations (--rescore)"
+                        for e in sorted({r["estimates_engine"] for r in rows if "estimates_engine" in r}))
+              + ". Seeds "
              f"{sorted({r['seed'] for r in rows})}, recordings of {durations} s. "
              "Each joint: parameters off by up to their catalogue tolerances, model form drawn per seed; "
              "calibrated on a bench recording without the torque sensor (`hdjoint estimate --calibrate-from`), "
@@ -286,8 +327,18 @@ def main() -> None:
     parser.add_argument("--first-seed", type=int, default=0)
     parser.add_argument("--cases", help="run only cases whose name contains this")
     parser.add_argument("--table-only", action="store_true", help="rebuild the table from the rows written so far")
+    parser.add_argument("--rescore", action="store_true",
+                        help="estimate anew with each row's recorded calibrated set (an estimator change only)")
     args = parser.parse_args()
-    if not args.table_only:
+    if args.rescore:
+        with multiprocessing.get_context("fork").Pool(2) as pool:
+            rows = pool.map(rescore, independent.load_results(RESULTS, KEY))
+        for row in rows:
+            print(_describe(row), flush=True)
+        text = "".join(json.dumps(row) + "\n" for row in rows)
+        RESULTS.with_suffix(".tmp").write_text(text)
+        RESULTS.with_suffix(".tmp").replace(RESULTS)
+    elif not args.table_only:
         jobs = [(c.truth.name, s) for s in range(args.first_seed, args.first_seed + args.seeds) for c in CASES
                 if not args.cases or args.cases in c.truth.name]
         independent.run_pending(jobs, run, RESULTS, KEY, 1, _describe)
