@@ -47,8 +47,8 @@ class ReadingJitter:
     def describe(self) -> str:
         """'encoder reading-time jitter: 58 us (41-72 us), measured from the recording'."""
         us = 1e6
-        return (f"encoder reading-time jitter: {self.std * us:.3g} us ({self.lo * us:.3g}-{self.hi * us:.3g} us), "
-                f"{self.reason}")
+        interval = f" ({self.lo * us:.3g}-{self.hi * us:.3g} us)" if self.hi > self.lo else ""
+        return f"encoder reading-time jitter: {self.std * us:.3g} us{interval}, {self.reason}"
 
 
 def reading_jitter(time, readings, coverage: float) -> ReadingJitter:
@@ -101,7 +101,9 @@ def _pieces(t: np.ndarray, y: np.ndarray) -> _Samples | None:
     omega = (y[2:] - y[:-2]) / (before + after)
     e = e - np.convolve(e, np.ones(HIGH_PASS) / HIGH_PASS, mode="same")
     steps = np.abs(np.diff(y))
-    quantum = float(steps[steps > 0].min()) if np.any(steps > 0) else 0.0
+    if not np.any(steps > 0):
+        return None  # the encoder never moved
+    quantum = float(steps[steps > 0].min())
     edge = HIGH_PASS // 2
     moving = np.abs(y[2:] - y[:-2]) >= 2 * MOVING_COUNTS * quantum
     moving[:edge] = moving[len(moving) - edge:] = False
@@ -115,9 +117,12 @@ def _pieces(t: np.ndarray, y: np.ndarray) -> _Samples | None:
     weight = np.ones(len(x))
     for _ in range(4):  # weighted least squares: e^2's spread grows with its mean; wild samples out
         c0, slope = _fit(x[keep], z[keep], weight[keep])
-        variance = np.maximum(c0 + slope * x, np.finfo(float).tiny)
+        # floored: a negative intercept would weigh the slowest samples without bound
+        variance = np.maximum(c0 + slope * x, 1e-3 * np.mean(z[keep]))
         keep = z <= WILD * variance
         weight = 1.0 / variance ** 2
+    if keep.sum() < MIN_SAMPLES:
+        return None
     c0, slope = _fit(x[keep], z[keep], weight[keep])
     return _Samples(index[keep], x[keep], z[keep], weight[keep], max(c0, np.finfo(float).tiny), float(x[keep].mean()))
 
