@@ -55,7 +55,8 @@ def reading_jitter(time, readings, coverage: float) -> ReadingJitter:
     """The std of when READINGS (encoder angles, each an array beside TIME,
     s) were taken against their stamps, with its COVERAGE interval (a block
     bootstrap of the slope of e^2 on omega^2, the encoders combined by their
-    precision). 0 when the interval of the slope (r^2) reaches 0, or when
+    precision). 0 when the interval of the slope (r^2) reaches 0, for the
+    encoders combined or for any one of them (a late reading moves all), or when
     the jitter's share of every encoder's residual variance is below
     MATERIAL: the data show none; 0 too, with the reason, when fewer than
     MIN_SAMPLES samples moved (a short or still recording)."""
@@ -72,10 +73,11 @@ def reading_jitter(time, readings, coverage: float) -> ReadingJitter:
     combined = weights @ slopes / weights.sum()
     estimate = float(weights @ _slope(sums.sum(axis=1)) / weights.sum())
     lo, hi = np.quantile(combined, [(1 - coverage) / 2, (1 + coverage) / 2])
+    own_lo = np.quantile(slopes, (1 - coverage) / 2, axis=1)
 
     def root(slope):
         return math.sqrt(max(float(slope), 0.0) / factor)
-    if lo <= 0.0:
+    if lo <= 0.0 or np.any(own_lo <= 0.0):  # a late reading moves every encoder: one alone shows its own noise
         return ReadingJitter(0.0, 0.0, root(hi), "none shown by the recording (the interval reaches 0)")
     if max(estimate * p.mean_x / p.c0 for p in pieces) < MATERIAL:
         return ReadingJitter(0.0, root(lo), root(hi), f"none that matters (under {MATERIAL:.0%} of the encoders' "
@@ -124,7 +126,8 @@ def _pieces(t: np.ndarray, y: np.ndarray) -> _Samples | None:
     if keep.sum() < MIN_SAMPLES:
         return None
     c0, slope = _fit(x[keep], z[keep], weight[keep])
-    return _Samples(index[keep], x[keep], z[keep], weight[keep], max(c0, np.finfo(float).tiny), float(x[keep].mean()))
+    white = quantum ** 2 / 8  # c0 is at least the quantisation's, 3/2 q^2/12, however the fit comes out
+    return _Samples(index[keep], x[keep], z[keep], weight[keep], max(c0, white), float(x[keep].mean()))
 
 
 def _fit(x, z, w):
