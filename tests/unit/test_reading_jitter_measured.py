@@ -80,3 +80,14 @@ def test_estimate_measures_the_jitter_unless_the_parameter_file_sets_it(tmp_path
     assert rms["measured"] < 0.6 * rms["zero"], rms
     assert "measured from the recording" in rms["measured printed"], rms
     assert "0 us, as the parameter file sets it (jsf_r_time)" in rms["zero printed"], rms
+
+
+def test_a_set_hdjoint_writes_leaves_the_jitter_to_each_recording_unless_the_user_set_it(tmp_path):
+    # --calibrate-from and diagnose write full sets; a default 0 written out would freeze the run's own jitter.
+    from hdjoint.jobs.estimate import as_written
+    full = parameters.defaults()
+    (tmp_path / "unstated.json").write_text('{"Kt": 0.05}')
+    (tmp_path / "stated.json").write_text('{"jsf_r_time": 3e-5}')
+    assert "jsf_r_time" not in as_written(full, tmp_path / "unstated.json")
+    assert "jsf_r_time" not in as_written(full, None)
+    assert as_written(dict(full, jsf_r_time=3e-5), tmp_path / "stated.json")["jsf_r_time"] == 3e-5

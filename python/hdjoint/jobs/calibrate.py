@@ -111,7 +111,7 @@ def estimate_calibrated(opts, calibrate_paths: list[str]):
     everything was computed. The set leaves the reading-time jitter out unless
     OPTS.params sets it: each recording's own is measured. Returns the
     estimate's Estimated."""
-    from hdjoint.jobs.estimate import READING_JITTER, estimate_to_file
+    from hdjoint.jobs.estimate import as_written, estimate_to_file
     params_file, document_file = sidecars(opts.output)
     check_output_file(opts.output, inputs=(opts.recording, opts.params, *calibrate_paths))
     for side in (params_file, document_file):
@@ -120,9 +120,7 @@ def estimate_calibrated(opts, calibrate_paths: list[str]):
     run = placed_on(read_recording(opts.recording, opts.time_unit, opts.current_sign), calibrated.params)
     with tempfile.TemporaryDirectory(dir=Path(opts.output).absolute().parent) as tmp:
         stage = Path(tmp)
-        if READING_JITTER not in parameters.stated(opts.params):
-            run.pop(READING_JITTER, None)
-        parameters.save(stage / "params.json", run)
+        parameters.save(stage / "params.json", as_written(run, opts.params))
         estimated = estimate_to_file(replace(opts, params=str(stage / "params.json"), output=str(stage / "estimates")))
         document = calibrated.document(calibrate_paths, estimated.jitter)
         (stage / "calibration.json").write_text(json.dumps(document, indent=2) + "\n")

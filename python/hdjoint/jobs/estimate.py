@@ -168,6 +168,15 @@ def _estimate_locked(opts: Options) -> Estimated:
     return Estimated(figures, jitter)
 
 
+def as_written(params: dict, params_path) -> dict:
+    """PARAMS as hdjoint writes a set: READING_JITTER left out unless the user's file PARAMS_PATH sets it,
+    so each recording estimated with the set has its own measured (an FMU takes 0, the default, alike)."""
+    from hdjoint.io import parameters
+    if READING_JITTER in parameters.stated(params_path):
+        return params
+    return {name: value for name, value in params.items() if name != READING_JITTER}
+
+
 def _reading_jitter(params_path, first: Recording, params: dict) -> ReadingJitter:
     """The filter's READING_JITTER, set into PARAMS: the parameter file's, else measured on FIRST (both encoders)."""
     from hdjoint.diagnosis.rules import INTERVAL
