@@ -34,6 +34,7 @@ from hdjoint.io import parameters
 from hdjoint.io.recording import write_recording
 from hdjoint.jobs.calibrate import placed_on
 from hdjoint.jobs.inputs import read_recording
+from hdjoint.jobs.estimate import as_written
 from hdjoint.jobs.joint_scale import SCALE_EVIDENCE_Z
 from hdjoint_truth.cases import EFFECT_CASES, JITTERED, TruthCase, draw, record
 
@@ -135,7 +136,7 @@ def _other_rule(tmp: Path, document: dict, rule: str) -> None:
     for name, entry in document["parameters"].items():
         params[name] = OTHER_RULES[rule](entry)
     params = placed_on(read_recording(str(tmp / "run.csv")), params)
-    parameters.save(tmp / f"{rule}.json", params)
+    parameters.save(tmp / f"{rule}.json", as_written(params, tmp / "calibrated.params.json"))
     _estimate(str(tmp / "run.csv"), "--params", str(tmp / f"{rule}.json"), "-o", str(tmp / f"{rule}.csv"))
 
 
@@ -160,8 +161,9 @@ def run(job: tuple[str, int], duration: float = DURATION) -> dict:
         tmp = Path(tmp)
         write_recording(tmp / "bench.csv", replace(bench, extra={}))  # what a drive logs: no truth columns
         write_recording(tmp / "run.csv", replace(run_rec, extra={}))
-        parameters.save(tmp / "nominal.json", joint.nominal)
-        parameters.save(tmp / "exact.json", exact_set(joint))
+        # A user's files state the joint, not the logger's jitter: each run's own is measured (jsf_r_time).
+        parameters.save(tmp / "nominal.json", as_written(joint.nominal, None))
+        parameters.save(tmp / "exact.json", as_written(exact_set(joint), None))
         _estimate(str(tmp / "run.csv"), "--params", str(tmp / "nominal.json"), "-o", str(tmp / "nominal.csv"))
         _estimate(str(tmp / "run.csv"), "--params", str(tmp / "exact.json"), "-o", str(tmp / "exact.csv"))
         started = time.perf_counter()

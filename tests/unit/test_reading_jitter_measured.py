@@ -57,11 +57,12 @@ def test_a_still_or_short_recording_gives_none_with_the_reason():
     assert still.std == 0.0 and "fewer than" in still.reason
 
 
-def _estimate(tmp_path, rec_csv, params: dict, name: str):
+def _estimate(tmp_path, rec_csv, params: dict, name: str, engine: str = "fmu"):
     parameters.save(tmp_path / f"{name}.json", params)
-    out, printed = tmp_path / f"{name}.csv", io.StringIO()
+    out, printed = tmp_path / f"{name}-{engine}.csv", io.StringIO()
     with contextlib.redirect_stdout(printed):
-        assert cli.main(["estimate", str(rec_csv), "--params", str(tmp_path / f"{name}.json"), "-o", str(out)]) == 0
+        assert cli.main(["estimate", str(rec_csv), "--params", str(tmp_path / f"{name}.json"), "-o", str(out),
+                         "--engine", engine]) == 0
     return np.genfromtxt(out, delimiter=",", names=True)["tau_hat"], printed.getvalue()
 
 
@@ -80,6 +81,9 @@ def test_estimate_measures_the_jitter_unless_the_parameter_file_sets_it(tmp_path
     assert rms["measured"] < 0.6 * rms["zero"], rms
     assert "measured from the recording" in rms["measured printed"], rms
     assert "0 us, as the parameter file sets it (jsf_r_time)" in rms["zero printed"], rms
+    batch, printed = _estimate(tmp_path, tmp_path / "run.csv", unstated, "measured", engine="batch")
+    assert printed.splitlines()[0] == rms["measured printed"].splitlines()[0]  # both engines: the same value
+    assert float(np.sqrt(np.mean((batch - truth)[300:] ** 2))) == pytest.approx(rms["measured"], rel=1e-3)
 
 
 def test_a_set_hdjoint_writes_leaves_the_jitter_to_each_recording_unless_the_user_set_it(tmp_path):
