@@ -50,9 +50,10 @@ def test_no_jitter_is_measured_where_the_stamps_are_right(late, stamp_actual):
 
 
 def test_a_still_or_short_recording_gives_none_with_the_reason():
-    stamps, motor, link = readings(np.random.default_rng(3).uniform(0.0, 150e-6, 300))
-    found = reading_jitter(stamps, (motor, link), COVERAGE)
-    assert found.std == 0.0 and "fewer than" in found.reason
+    for n in (2, 5, 300):
+        stamps, motor, link = readings(np.random.default_rng(3).uniform(0.0, 150e-6, n))
+        found = reading_jitter(stamps, (motor, link), COVERAGE)
+        assert found.std == 0.0 and "fewer than" in found.reason
     still = reading_jitter(np.arange(5000) * TS, (np.zeros(5000), np.full(5000, LINK)), COVERAGE)
     assert still.std == 0.0 and "fewer than" in still.reason
 

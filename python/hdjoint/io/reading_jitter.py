@@ -98,6 +98,8 @@ class _Samples:
 
 def _pieces(t: np.ndarray, y: np.ndarray) -> _Samples | None:
     """One encoder's moving samples, or None when too few moved."""
+    if len(y) < MIN_SAMPLES:
+        return None
     before, after = t[1:-1] - t[:-2], t[2:] - t[1:-1]
     e = y[1:-1] - (y[:-2] * after + y[2:] * before) / (before + after)
     omega = (y[2:] - y[:-2]) / (before + after)
