@@ -55,7 +55,7 @@ def main(argv=None) -> int:
                 rec = jittered(fine, jitter, np.random.default_rng(seed))
                 path, out = Path(tmp) / "rec.csv", Path(tmp) / "est.csv"
                 write_recording(path, rec)
-                figures = estimate_to_file(Options(str(path), str(out), params=str(params), allow_jitter=True))
+                figures = estimate_to_file(Options(str(path), str(out), params=str(params), allow_jitter=True)).figures
                 for name in ESTIMATES:
                     rms[jitter][name].append(figures[name].rms)
                 worst = float(np.max(np.abs(np.diff(rec.time) - STEP))) / STEP

@@ -35,6 +35,7 @@ from hdjoint.io import parameters
 from hdjoint.io.recording import write_recording
 from hdjoint.jobs.calibrate import placed_on
 from hdjoint.jobs.inputs import read_recording
+from hdjoint.jobs.estimate import as_written
 from hdjoint.jobs.joint_scale import SCALE_EVIDENCE_Z
 from hdjoint_truth.cases import EFFECT_CASES, JITTERED, TruthCase, draw, record
 
@@ -136,7 +137,7 @@ def _other_rule(tmp: Path, document: dict, rule: str) -> None:
     for name, entry in document["parameters"].items():
         params[name] = OTHER_RULES[rule](entry)
     params = placed_on(read_recording(str(tmp / "run.csv")), params)
-    parameters.save(tmp / f"{rule}.json", params)
+    parameters.save(tmp / f"{rule}.json", as_written(params, tmp / "calibrated.params.json"))
     _estimate(str(tmp / "run.csv"), "--params", str(tmp / f"{rule}.json"), "-o", str(tmp / f"{rule}.csv"))
 
 
@@ -153,8 +154,9 @@ def _scored_sets(tmp: Path, joint, run_rec, calibrate) -> tuple[dict, dict, floa
     truth = run_rec.extra["tau_joint"]
     span = float(np.ptp(truth))
     write_recording(tmp / "run.csv", replace(run_rec, extra={}))  # what a drive logs: no truth columns
-    parameters.save(tmp / "nominal.json", joint.nominal)
-    parameters.save(tmp / "exact.json", exact_set(joint))
+    # A user's files state the joint, not the logger's jitter: each run's own is measured (jsf_r_time).
+    parameters.save(tmp / "nominal.json", as_written(joint.nominal, None))
+    parameters.save(tmp / "exact.json", as_written(exact_set(joint), None))
     _estimate(str(tmp / "run.csv"), "--params", str(tmp / "nominal.json"), "-o", str(tmp / "nominal.csv"))
     _estimate(str(tmp / "run.csv"), "--params", str(tmp / "exact.json"), "-o", str(tmp / "exact.csv"))
     started = time.perf_counter()
@@ -184,7 +186,7 @@ def rescore(row: dict) -> dict:
             raise Refused(row["verdict"])
         params = {**joint.nominal, **{n: e["used"] for n, e in row["parameters"].items()}}
         params = placed_on(read_recording(str(tmp / "run.csv")), params)
-        parameters.save(tmp / "calibrated.params.json", params)
+        parameters.save(tmp / "calibrated.params.json", as_written(params, None))
         _estimate(str(tmp / "run.csv"), "--params", str(tmp / "calibrated.params.json"), "-o",
                   str(tmp / "calibrated.csv"))
         # As the calibration document has them: a figure it did not give (None in the row) left out.

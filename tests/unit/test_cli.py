@@ -180,7 +180,9 @@ def test_estimate_without_tau_sensor_prints_no_error_figures(rec_csv, tmp_path, 
     assert code == 0, err
     assert out.is_file()
     assert "RMS" not in stdout and "tau_ukf " not in stdout
-    assert stdout.strip() == f"wrote {out} (the recording has no tau_sensor: no error figures)"  # not silence
+    jitter, wrote = stdout.strip().splitlines()
+    assert wrote == f"wrote {out} (the recording has no tau_sensor: no error figures)"  # not silence
+    assert jitter.startswith("encoder reading-time jitter: 0 us") and "none" in jitter  # hdjoint's own: not late
 
 
 def test_estimate_uses_the_params_file(rec_csv, tmp_path, capsys, estimated, default_params):

@@ -63,10 +63,12 @@ def cmd_estimate(args) -> int:
                    allow_jitter=args.allow_jitter, current_sign=args.current_sign)
     if args.calibrate_from:
         from hdjoint.jobs.calibrate import estimate_calibrated, sidecars
-        figures = estimate_calibrated(opts, args.calibrate_from)
+        estimated = estimate_calibrated(opts, args.calibrate_from)
         print(f"calibrated set: {sidecars(args.output)[0]} (its calibration: {sidecars(args.output)[1]})")
     else:
-        figures = estimate_to_file(opts)
+        estimated = estimate_to_file(opts)
+    print(estimated.jitter.describe())
+    figures = estimated.figures
     if figures:
         print(f"{'estimate':<16} {'RMS error':>10} {'max error':>10}   (N.m, against tau_sensor)")
         for name, fig in figures.items():

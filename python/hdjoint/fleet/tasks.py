@@ -32,7 +32,7 @@ def estimate(job: Job, out: Path, engine: str) -> dict:
     from hdjoint.jobs.estimate import Options, estimate_to_file
     out.mkdir(parents=True, exist_ok=True)
     figures = estimate_to_file(Options(recording=job.recording, output=str(out / "estimates.csv"),
-                                       params=job.params, engine=engine))
+                                       params=job.params, engine=engine)).figures
     row = {}
     for name in ESTIMATES:
         if name in figures:

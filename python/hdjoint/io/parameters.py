@@ -265,6 +265,13 @@ def load(path: str | os.PathLike | None) -> dict[str, float]:
     return params
 
 
+def stated(path: str | os.PathLike | None) -> set[str]:
+    """The parameters a file sets itself (the rest of a loaded set are defaults); none for None."""
+    if path is None:
+        return set()
+    return set(_read_json(path)) - {TOLERANCE_KEY, ACCURACY_KEY, SENSOR_NOISE_KEY}
+
+
 def load_statements(path: str | os.PathLike | None) -> dict:
     """What a parameter file states beside its parameters, checked, as the
     diagnosis takes it: "tolerance" (relative, per parameter), "accuracy"

@@ -42,8 +42,10 @@ class CalibratedSet:
     findings: list[dict]  # what it named: effect, kind, parameters
     scale: float          # the joint's torque scale applied to the estimates (joint_scale.py)
 
-    def document(self, recordings: list[str]) -> dict:
-        """The calibration as written beside the estimates (`<output>.calibration.json`)."""
+    def document(self, recordings: list[str], jitter) -> dict:
+        """The calibration as written beside the estimates (`<output>.calibration.json`), with the
+        reading-time JITTER the estimate ran with (a property of the estimated recording, not calibrated)."""
+        from hdjoint.jobs.estimate import READING_JITTER
         table = parameters.table()
         return {"calibrated_from": list(recordings), "verdict": self.verdict, "findings": self.findings,
                 "rule": "every parameter at its estimate (maximum a posteriori, the tolerance its prior), "
@@ -52,7 +54,10 @@ class CalibratedSet:
                         f"{SCALE_EVIDENCE_Z:g} tolerances; a0 is placed on the estimated recording",
                 "joint_scale": self.scale,
                 "parameters": {name: {"description": table[name].description, "unit": table[name].unit, **entry}
-                               for name, entry in self.calibration.items()}}
+                               for name, entry in self.calibration.items()},
+                "reading_time_jitter": {"parameter": READING_JITTER, "unit": "s", "used": jitter.std,
+                                        "lo": jitter.lo, "hi": jitter.hi, "how": jitter.reason,
+                                        "in_words": jitter.describe()}}
 
 
 def _progress(message: str) -> None:
@@ -99,12 +104,14 @@ def sidecars(output: str) -> tuple[Path, Path]:
     return out.with_suffix(".params.json"), out.with_suffix(".calibration.json")
 
 
-def estimate_calibrated(opts, calibrate_paths: list[str]) -> dict:
+def estimate_calibrated(opts, calibrate_paths: list[str]):
     """Calibrate on CALIBRATE_PATHS (OPTS.params the nominal set), then
     estimate OPTS.recording with the calibrated set into OPTS.output; the set
     and its calibration are written beside it. Nothing is written unless
-    everything was computed. Returns the estimate's error figures."""
-    from hdjoint.jobs.estimate import estimate_to_file
+    everything was computed. The set leaves the reading-time jitter out unless
+    OPTS.params sets it: each recording's own is measured. Returns the
+    estimate's Estimated."""
+    from hdjoint.jobs.estimate import as_written, estimate_to_file
     params_file, document_file = sidecars(opts.output)
     check_output_file(opts.output, inputs=(opts.recording, opts.params, *calibrate_paths))
     for side in (params_file, document_file):
@@ -113,11 +120,12 @@ def estimate_calibrated(opts, calibrate_paths: list[str]) -> dict:
     run = placed_on(read_recording(opts.recording, opts.time_unit, opts.current_sign), calibrated.params)
     with tempfile.TemporaryDirectory(dir=Path(opts.output).absolute().parent) as tmp:
         stage = Path(tmp)
-        parameters.save(stage / "params.json", run)
-        (stage / "calibration.json").write_text(json.dumps(calibrated.document(calibrate_paths), indent=2) + "\n")
-        figures = estimate_to_file(replace(opts, params=str(stage / "params.json"), output=str(stage / "estimates")))
+        parameters.save(stage / "params.json", as_written(run, opts.params))
+        estimated = estimate_to_file(replace(opts, params=str(stage / "params.json"), output=str(stage / "estimates")))
+        document = calibrated.document(calibrate_paths, estimated.jitter)
+        (stage / "calibration.json").write_text(json.dumps(document, indent=2) + "\n")
         for staged, target in ((stage / "params.json", params_file), (stage / "calibration.json", document_file),
                                (stage / "estimates", Path(opts.output))):
             check_replaceable(target)
             replace_into(staged, target)
-    return figures
+    return estimated

@@ -39,7 +39,8 @@ def _diagnose_locked(paths, params, out, validate, time_unit, current_sign) -> d
     # The report's figures are drawn by a helper that imports matplotlib while the diagnosis runs.
     with helper(prepare_drawing) as drawing:
         doc, page = _diagnosed(paths, params, validate, time_unit, current_sign, drawing)
-    write_diagnosis(out, doc, page)
+    from hdjoint.jobs.estimate import as_written
+    write_diagnosis(out, doc, page, as_written(doc["params"], params))
     return doc
 
 
@@ -101,8 +102,8 @@ def screened_recordings(recs):
     return cleaned, found
 
 
-def write_diagnosis(out, doc: dict, page: str) -> None:
-    """Stage the four files in a folder inside OUT, then move them in, so a
+def write_diagnosis(out, doc: dict, page: str, corrected: dict) -> None:
+    """Stage the four files (CORRECTED the set params.json and .ssv hold) in a folder inside OUT, then move them in, so a
     failure (a full disk) never leaves a half-written OUT, nor an OUT this
     run created; a run killed outright leaves its staging folder, which the
     next run removes."""
@@ -120,8 +121,8 @@ def write_diagnosis(out, doc: dict, page: str) -> None:
         stage.mkdir()
         findings = json.dumps(strict_json(doc), indent=2, allow_nan=False) + "\n"  # strict JSON: NaN is null
         for name, write in (("findings.json", lambda p: p.write_text(findings)),
-                            ("params.json", lambda p: parameters.save(p, doc["params"])),
-                            ("params.ssv", lambda p: parameters.save_ssv(p, doc["params"], name="hdjoint corrected")),
+                            ("params.json", lambda p: parameters.save(p, corrected)),
+                            ("params.ssv", lambda p: parameters.save_ssv(p, corrected, name="hdjoint corrected")),
                             ("report.html", lambda p: p.write_text(page))):
             try:
                 write(stage / name)

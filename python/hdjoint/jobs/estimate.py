@@ -2,7 +2,11 @@
 and its time base checked as it comes (unit, Ts, gaps, jitter); either engine
 streams (estimate_engines), and the smoother keeps what its backward pass
 needs on disk (estimate_smoother), so memory does not grow with the
-recording's length."""
+recording's length. The filter's reading-time jitter (jsf_r_time), unless
+the parameter file sets it, is measured on the first block, which the job
+holds anyway: the filter needs it before its first sample, and a logger's
+jitter does not change along a recording, so a second pass over the file
+would buy nothing."""
 from __future__ import annotations
 
 import contextlib
@@ -15,12 +19,15 @@ from hdjoint.estimation.engines import BothEngines, CoreEngine, FmuEngine, RowFe
 from hdjoint.estimation.smoother import SMOOTH_COLUMNS, SmoothedRows
 from hdjoint.jobs.inputs import UserError, check_output_file, locked_output, read_params
 from hdjoint.estimation.metrics import RunningErrorFigures
+from hdjoint.io.reading_jitter import ReadingJitter, reading_jitter
 from hdjoint.io.screening import Degenerate, check_no_wrap, find_outliers
 from hdjoint.io.recording import CHUNK_ROWS, CsvWriter, Recording, RecordingError, iter_recording
 from hdjoint.io.timebase import (TIME_UNITS, TimeBaseError, check_step, describe, given_ts, irregular_steps,
     sample_period)
 
 FIGURES_OF = ("tau_compliance", "tau_ukf", "tau_hat")
+# The filter's parameter for when the encoders were read: measured on the recording unless the file sets it.
+READING_JITTER = "jsf_r_time"
 
 
 @dataclass
@@ -42,6 +49,12 @@ class Block:
     """Consecutive samples (time in seconds) and the rows at which a new segment starts (a split gap)."""
     rec: Recording
     cuts: list[int] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class Estimated:
+    figures: dict            # {estimate name: ErrorFigures against tau_sensor}, empty without a sensor
+    jitter: ReadingJitter    # the reading-time jitter the filter ran with, and where it came from
 
 
 class TimedBlocks:
@@ -79,6 +92,10 @@ class TimedBlocks:
             chunk.recording.time = chunk.recording.time * factor
             chunk.recording.i_m = chunk.recording.i_m * self.opts.current_sign
             yield chunk
+
+    @property
+    def first(self) -> Recording:
+        return self._first.recording
 
     def __iter__(self):
         previous = None  # (time, line) of the row before the block
@@ -119,18 +136,19 @@ def _pieces(n: int, cuts: list[int]):
             yield bounds[k], bounds[k + 1], k > 0
 
 
-def estimate_to_file(opts: Options) -> dict:
-    """Run the estimator over OPTS.recording into OPTS.output; returns
-    {estimate name: ErrorFigures against tau_sensor} (empty without a sensor)."""
+def estimate_to_file(opts: Options) -> Estimated:
+    """Run the estimator over OPTS.recording into OPTS.output; returns its
+    error figures and the reading-time jitter it ran with."""
     check_output_file(opts.output, inputs=(opts.recording, opts.params))  # before any work
     with locked_output(opts.output):
         return _estimate_locked(opts)
 
 
-def _estimate_locked(opts: Options) -> dict:
+def _estimate_locked(opts: Options) -> Estimated:
     from hdjoint.io import parameters
     params = read_params(opts.params)
     blocks = TimedBlocks(opts, given_ts(opts.params))
+    jitter = _reading_jitter(opts.params, blocks.first, params)
     ts_from_recording = given_ts(opts.params) is None
     if ts_from_recording:
         params["Ts"] = blocks.ts
@@ -147,7 +165,28 @@ def _estimate_locked(opts: Options) -> dict:
               "out)", file=sys.stderr)
     if ts_from_recording and abs(blocks.ts - 1e-3) > 1e-9:
         print(f"note: estimator sample period Ts = {blocks.ts:g} s (the recording's median step)", file=sys.stderr)
-    return figures
+    return Estimated(figures, jitter)
+
+
+def as_written(params: dict, params_path) -> dict:
+    """PARAMS as hdjoint writes a set: READING_JITTER left out unless the user's file PARAMS_PATH sets it,
+    so each recording estimated with the set has its own measured (an FMU takes 0, the default, alike)."""
+    from hdjoint.io import parameters
+    if READING_JITTER in parameters.stated(params_path):
+        return params
+    return {name: value for name, value in params.items() if name != READING_JITTER}
+
+
+def _reading_jitter(params_path, first: Recording, params: dict) -> ReadingJitter:
+    """The filter's READING_JITTER, set into PARAMS: the parameter file's, else measured on FIRST (both encoders)."""
+    from hdjoint.diagnosis.rules import INTERVAL
+    from hdjoint.io import parameters
+    if READING_JITTER in parameters.stated(params_path):
+        given = params[READING_JITTER]
+        return ReadingJitter(given, given, given, f"as the parameter file sets it ({READING_JITTER})")
+    found = reading_jitter(first.time, (first.theta_m, first.theta_l), INTERVAL)
+    params[READING_JITTER] = found.std
+    return found
 
 
 def _engine(opts: Options, params: dict, ts: float):
