@@ -107,6 +107,8 @@ def exact_set(joint) -> dict:
     exact = dict(joint.nominal)
     exact.update({k: float(v) for k, v in joint.truth.items() if k in parameters.table()})
     exact["wg_load"] = 1.0
+    if joint.form.friction == "tanh":  # the truth's Coulomb law is the model's, smoothed over its form's speed
+        exact["omega_fc"] = joint.form.omega_fc
     return exact
 
 
@@ -196,7 +198,9 @@ def rescore(row: dict) -> dict:
     with tempfile.TemporaryDirectory(prefix="hdjoint-sensorless-") as tmp, \
             threadpool_limits(limits=1, user_api="blas"):
         shares, _, _ = _scored_sets(Path(tmp), joint, run_rec, recorded_calibration)
-    return {**row, "shares": shares, "estimates_engine": stamp.engine()}
+    exact = exact_set(joint)
+    moved = {n: {**e, "truth": exact.get(n)} for n, e in row["parameters"].items()}
+    return {**row, "shares": shares, "parameters": moved, "estimates_engine": stamp.engine()}
 
 
 def run(job: tuple[str, int], duration: float = DURATION) -> dict:
@@ -219,7 +223,7 @@ def run(job: tuple[str, int], duration: float = DURATION) -> dict:
         shares, document, calibrating = _scored_sets(Path(tmp), joint, run_rec, calibrate_from_bench)
     # Where the calibration put each parameter, beside the truth's value (to tell why it helped or hurt).
     moved = {n: {"nominal": e["nominal"], "estimate": e["estimate"], "lo": e.get("lo"), "hi": e.get("hi"),
-                 "used": e["used"], "identified": e.get("identified"), "truth": joint.truth.get(n)}
+                 "used": e["used"], "identified": e.get("identified"), "truth": exact_set(joint).get(n)}
              for n, e in document["parameters"].items() if n != "a0"}
     return {"case": name, "seed": seed, "far_off": case.far_off, "duration": duration,
             "excitations": [s.excitation for s in joint.setups[:2]], "load": joint.setups[1].load,
