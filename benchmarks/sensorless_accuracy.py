@@ -103,12 +103,17 @@ def joint_for(case: Case, seed: int, duration: float):
 
 def exact_set(joint) -> dict:
     """The truth's value of every parameter the model has; the wave generator loaded by
-    tau_f/N, as the truth's is. An effect in a form the model lacks stays out."""
+    tau_f/N, as the truth's is; Bouc-Wen hysteresis as the estimator's Dahl law. An effect
+    in a form the model lacks stays out."""
     exact = dict(joint.nominal)
     exact.update({k: float(v) for k, v in joint.truth.items() if k in parameters.table()})
     exact["wg_load"] = 1.0
     if joint.form.friction == "tanh":  # the truth's Coulomb law is the model's, smoothed over its form's speed
         exact["omega_fc"] = joint.form.omega_fc
+    if exact.get("bw_A", 0.0) > 0.0 and not exact["hys_H"]:
+        # Bouc-Wen (n = 1) as the estimator's Dahl law: the same first slope A and saturation A/(beta + gamma).
+        exact["hys_sigma"] = exact["bw_A"]
+        exact["hys_H"] = exact["bw_A"] / (exact["bw_beta"] + exact["bw_gamma"])
     return exact
 
 
