@@ -1,11 +1,12 @@
 """When the encoders were read against the time stamps: a logger that stamps
 nominal instants but reads its encoders a little late (by tau_k, iid, std r)
 leaves an error omega * tau_k in each reading, which the estimator would take
-for motion (jsf_r_time). A reading's residual e against its neighbours
-(interpolated at its stamped time) has variance c0 + (3/2) r^2 omega^2, c0
-being quantisation, interpolation error and what the motion's curvature
-leaves; the slope of e^2 on omega^2 gives r. Stamps of the actual reading
-times leave no such slope."""
+for motion (jsf_r_time). A reading's residual e against its four neighbours
+(the cubic through them, at its stamped time: the motion's curvature and jerk
+cancel, which at a few hundred hertz would otherwise pass for jitter) has
+variance c0 + f r^2 omega^2, c0 being quantisation and interpolation error, f
+the stencil's gain on white timing errors; the slope of e^2 on omega^2 gives r.
+Stamps of the actual reading times leave no such slope."""
 from __future__ import annotations
 
 import math
@@ -15,11 +16,16 @@ import numpy as np
 
 from hdjoint.io.timebase import GAP_FACTOR
 
-# Residuals have their local mean taken off over this many samples: an
-# acceleration or a slow vibration biases e alike for neighbours, the timing
-# error's part (a second difference of white noise) sums to almost nothing
-# over the window. It adds 1/window^2 to the factor 3/2.
+# Residuals have their local mean taken off over this many samples: a slow
+# vibration biases e alike for neighbours, the timing error's part (a
+# difference of white noise) sums to almost nothing over the window.
 HIGH_PASS = 9
+# The residual's weights on the readings k-2 .. k+2 on a regular time base
+# (the cubic through the four neighbours, at the middle), and its gain on white
+# timing errors after the high-pass: the sum of the squared combined weights.
+STENCIL = np.array([1.0 / 6.0, -2.0 / 3.0, 1.0, -2.0 / 3.0, 1.0 / 6.0])
+_HIGH_PASS_KERNEL = np.eye(1, HIGH_PASS, HIGH_PASS // 2).ravel() - 1.0 / HIGH_PASS
+TIMING_GAIN = float(np.sum(np.convolve(STENCIL, _HIGH_PASS_KERNEL) ** 2))
 # A sample counts when the encoder moved at least this many of its counts per
 # sample: slower, the quantisation and the interpolation error are not yet
 # white, and c0 would grow with speed (a slope that is not timing).
@@ -65,7 +71,7 @@ def reading_jitter(time, readings, coverage: float) -> ReadingJitter:
     pieces = [p for p in pieces if p is not None]
     if not pieces:
         return ReadingJitter(0.0, 0.0, 0.0, f"not measured: fewer than {MIN_SAMPLES} samples moved the encoders")
-    factor = 1.5 + 1.0 / HIGH_PASS ** 2
+    factor = TIMING_GAIN
     sums = np.stack([_block_sums(p, len(t)) for p in pieces])  # encoder, block, statistic
     draws = np.random.default_rng(0).multinomial(BLOCKS, np.full(BLOCKS, 1.0 / BLOCKS), RESAMPLES)
     slopes = _slope(np.einsum("rb,ebs->ers", draws, sums))  # encoder, resample
@@ -101,7 +107,8 @@ def _pieces(t: np.ndarray, y: np.ndarray) -> _Samples | None:
     if len(y) < MIN_SAMPLES:
         return None
     before, after = t[1:-1] - t[:-2], t[2:] - t[1:-1]
-    e = y[1:-1] - (y[:-2] * after + y[2:] * before) / (before + after)
+    e = np.zeros(len(y) - 2)  # the residual of readings 1 .. n-2; the two at the ends stay out (edge below)
+    e[1:-1] = y[2:-2] - _cubic_at_middle(t, y)
     omega = (y[2:] - y[:-2]) / (before + after)
     e = e - np.convolve(e, np.ones(HIGH_PASS) / HIGH_PASS, mode="same")
     steps = np.abs(np.diff(y))
@@ -112,7 +119,10 @@ def _pieces(t: np.ndarray, y: np.ndarray) -> _Samples | None:
     moving = np.abs(y[2:] - y[:-2]) >= 2 * MOVING_COUNTS * quantum
     moving[:edge] = moving[len(moving) - edge:] = False
     moving &= np.isfinite(e) & np.isfinite(omega)
-    moving &= np.maximum(before, after) <= GAP_FACTOR * np.median(np.diff(t))  # not across a gap
+    dt = np.diff(t)
+    wide = dt > GAP_FACTOR * np.median(dt)  # a gap: the stencil must not span one
+    near_gap = np.convolve(wide, np.ones(4), mode="full")[2:len(y)] > 0  # steps k-2 .. k+1 of reading k
+    moving &= ~near_gap
     index = np.flatnonzero(moving)
     if len(index) < MIN_SAMPLES:
         return None
@@ -130,6 +140,21 @@ def _pieces(t: np.ndarray, y: np.ndarray) -> _Samples | None:
     c0, slope = _fit(x[keep], z[keep], weight[keep])
     white = quantum ** 2 / 8  # c0 is at least the quantisation's, 3/2 q^2/12, however the fit comes out
     return _Samples(index[keep], x[keep], z[keep], weight[keep], max(c0, white), float(x[keep].mean()))
+
+
+def _cubic_at_middle(t: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """The cubic through readings k-2, k-1, k+1, k+2 at t_k, for k = 2 .. n-3 (Lagrange, on the stamps)."""
+    nodes = [t[j:len(t) - 4 + j] for j in (0, 1, 3, 4)]
+    values = [y[j:len(y) - 4 + j] for j in (0, 1, 3, 4)]
+    at = t[2:-2]
+    out = np.zeros(len(at))
+    for j, (tj, yj) in enumerate(zip(nodes, values)):
+        weight = np.ones(len(at))
+        for m, tm in enumerate(nodes):
+            if m != j:
+                weight *= (at - tm) / (tj - tm)
+        out += weight * yj
+    return out
 
 
 def _fit(x, z, w):
