@@ -28,15 +28,20 @@ def output_dir(out: str, job: Job) -> Path:
 def estimate(job: Job, out: Path, engine: str) -> dict:
     """Torque estimates into out/estimates.csv through the single-recording
     job (one reading path: the same time-base checks, gaps and jitter refused,
-    Ts checked against the parameter file); error figures against the sensor."""
-    from hdjoint.jobs.estimate import Options, estimate_to_file
+    Ts checked against the parameter file); error figures against the sensor,
+    and the encoders' reading-time jitter the filter ran with (s, with its
+    interval: a logger that starts reading late shows in the fleet's table)."""
+    from hdjoint.jobs.estimate import READING_JITTER, Options, estimate_to_file
     out.mkdir(parents=True, exist_ok=True)
-    figures = estimate_to_file(Options(recording=job.recording, output=str(out / "estimates.csv"),
-                                       params=job.params, engine=engine)).figures
+    estimated = estimate_to_file(Options(recording=job.recording, output=str(out / "estimates.csv"),
+                                         params=job.params, engine=engine))
     row = {}
     for name in ESTIMATES:
-        if name in figures:
-            row[f"est.{name}.rms"], row[f"est.{name}.max"] = figures[name].rms, figures[name].max
+        if name in estimated.figures:
+            row[f"est.{name}.rms"], row[f"est.{name}.max"] = estimated.figures[name].rms, estimated.figures[name].max
+    jitter = estimated.jitter
+    row[f"est.{READING_JITTER}"], row[f"est.{READING_JITTER}.lo"], row[f"est.{READING_JITTER}.hi"] = \
+        jitter.std, jitter.lo, jitter.hi
     return row
 
 
