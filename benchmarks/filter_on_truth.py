@@ -22,10 +22,8 @@ from pathlib import Path
 import numpy as np
 
 from hdjoint import _core
-from hdjoint.diagnosis.rules import INTERVAL
 from hdjoint.io import parameters
-from hdjoint.io.reading_jitter import reading_jitter
-from hdjoint.jobs.estimate import READING_JITTER
+from hdjoint.jobs.estimate import READING_JITTER, measured_reading_jitter
 from hdjoint_truth.cases import record
 
 import sensorless_accuracy as sensorless
@@ -55,7 +53,7 @@ def score(rec: dict, settings: dict | None = None) -> dict:
     """tau_compliance, tau_hat and tau_smooth with the exact set (and SETTINGS), the encoders' reading-time
     jitter measured from the recording as `hdjoint estimate` measures it: RMS error in % of the span, and +-2
     sigma coverage."""
-    jitter = reading_jitter(rec["time"], (rec["theta_m"], rec["theta_l"]), INTERVAL)
+    jitter = measured_reading_jitter(rec["time"], rec["theta_m"], rec["theta_l"])
     params = {**rec["exact"], "Ts": float(np.median(np.diff(rec["time"]))), READING_JITTER: jitter.std,
               **(settings or {})}
     out = _core.run_estimator(parameters.for_estimator(params), rec["time"], rec["i_m"], rec["theta_m"],

@@ -227,8 +227,9 @@ def run(job: tuple[str, int], duration: float = DURATION) -> dict:
             threadpool_limits(limits=1, user_api="blas"):
         shares, document, calibrating = _scored_sets(Path(tmp), joint, run_rec, calibrate_from_bench)
     # Where the calibration put each parameter, beside the truth's value (to tell why it helped or hurt).
+    exact = exact_set(joint)
     moved = {n: {"nominal": e["nominal"], "estimate": e["estimate"], "lo": e.get("lo"), "hi": e.get("hi"),
-                 "used": e["used"], "identified": e.get("identified"), "truth": exact_set(joint).get(n)}
+                 "used": e["used"], "identified": e.get("identified"), "truth": exact.get(n)}
              for n, e in document["parameters"].items() if n != "a0"}
     return {"case": name, "seed": seed, "far_off": case.far_off, "duration": duration,
             "excitations": [s.excitation for s in joint.setups[:2]], "load": joint.setups[1].load,

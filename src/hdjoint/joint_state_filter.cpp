@@ -235,8 +235,7 @@ void JointStateFilter::average_friction_over_speed() {
     const JointCovariance& P = kalman_.covariance();
     const double var_omega_m =
         p_.N * p_.N * std::max(0.0, P(kOmegaL, kOmegaL) + 2.0 * P(kOmegaL, kNu) + P(kNu, kNu));
-    constexpr double kHalfPi = 1.57079632679489661923;
-    system_.p.omega_fc = std::sqrt(p_.omega_fc * p_.omega_fc + kHalfPi * var_omega_m);
+    system_.p.omega_fc = std::sqrt(p_.omega_fc * p_.omega_fc + 0.25 * kTwoPi * var_omega_m);
 }
 
 double JointStateFilter::torque_variance(const JointTorque& T, const JointCovariance& P) {

@@ -71,7 +71,6 @@ def reading_jitter(time, readings, coverage: float) -> ReadingJitter:
     pieces = [p for p in pieces if p is not None]
     if not pieces:
         return ReadingJitter(0.0, 0.0, 0.0, f"not measured: fewer than {MIN_SAMPLES} samples moved the encoders")
-    factor = TIMING_GAIN
     sums = np.stack([_block_sums(p, len(t)) for p in pieces])  # encoder, block, statistic
     draws = np.random.default_rng(0).multinomial(BLOCKS, np.full(BLOCKS, 1.0 / BLOCKS), RESAMPLES)
     slopes = _slope(np.einsum("rb,ebs->ers", draws, sums))  # encoder, resample
@@ -82,7 +81,7 @@ def reading_jitter(time, readings, coverage: float) -> ReadingJitter:
     own_lo = np.quantile(slopes, (1 - coverage) / 2, axis=1)
 
     def root(slope):
-        return math.sqrt(max(float(slope), 0.0) / factor)
+        return math.sqrt(max(float(slope), 0.0) / TIMING_GAIN)
     if lo <= 0.0 or np.any(own_lo <= 0.0):  # a late reading moves every encoder: one alone shows its own noise
         return ReadingJitter(0.0, 0.0, root(hi), "none shown by the recording (the interval reaches 0)")
     if max(estimate * p.mean_x / p.c0 for p in pieces) < MATERIAL:
@@ -115,7 +114,7 @@ def _pieces(t: np.ndarray, y: np.ndarray) -> _Samples | None:
     if not np.any(steps > 0):
         return None  # the encoder never moved
     quantum = float(steps[steps > 0].min())
-    edge = HIGH_PASS // 2
+    edge = HIGH_PASS // 2 + 1  # the high-pass must not reach the two readings without a residual
     moving = np.abs(y[2:] - y[:-2]) >= 2 * MOVING_COUNTS * quantum
     moving[:edge] = moving[len(moving) - edge:] = False
     moving &= np.isfinite(e) & np.isfinite(omega)

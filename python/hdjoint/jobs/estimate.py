@@ -179,14 +179,19 @@ def as_written(params: dict, params_path) -> dict:
 
 def _reading_jitter(params_path, first: Recording, params: dict) -> ReadingJitter:
     """The filter's READING_JITTER, set into PARAMS: the parameter file's, else measured on FIRST (both encoders)."""
-    from hdjoint.diagnosis.rules import INTERVAL
     from hdjoint.io import parameters
     if READING_JITTER in parameters.stated(params_path):
         given = params[READING_JITTER]
         return ReadingJitter(given, given, given, f"as the parameter file sets it ({READING_JITTER})")
-    found = reading_jitter(first.time, (first.theta_m, first.theta_l), INTERVAL)
+    found = measured_reading_jitter(first.time, first.theta_m, first.theta_l)
     params[READING_JITTER] = found.std
     return found
+
+
+def measured_reading_jitter(time, theta_m, theta_l) -> ReadingJitter:
+    """The reading-time jitter of both encoders' readings, with its interval at the diagnosis's coverage."""
+    from hdjoint.diagnosis.rules import INTERVAL
+    return reading_jitter(time, (theta_m, theta_l), INTERVAL)
 
 
 def _engine(opts: Options, params: dict, ts: float):
