@@ -59,6 +59,10 @@ def test_a_sensorless_calibration_is_used_at_its_estimates(joint_files, capsys):
     assert used["a0"] != nominal["a0"]  # placed on the run
     assert all(r["unit"] is not None and r["description"] for r in rows.values())
     assert f"no harder beyond {SCALE_EVIDENCE_Z:g} tolerances" in document["rule"]  # the rule says the scale's cap
+    # The nominal file states jsf_r_time (a full set): the calibrated set keeps it, and the document says so.
+    assert used["jsf_r_time"] == nominal["jsf_r_time"] and "jsf_r_time" in json.loads(
+        (f / "calibrated.params.json").read_text())
+    assert document["reading_time_jitter"]["how"] == "as the parameter file sets it (jsf_r_time)"
     # Never worse than the nominal set (within 10 %) on the other recording.
     assert _tau_hat_rms(f / "calibrated.csv", f / "run.csv") <= 1.1 * _tau_hat_rms(f / "nominal.csv", f / "run.csv")
 

@@ -11,6 +11,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from cli_helpers import rec_csv, run_cli, simulated  # noqa: F401 (fixtures)
 from hdjoint.app import cli
 from hdjoint.io import parameters
 from hdjoint.io.reading_jitter import reading_jitter
@@ -103,5 +104,16 @@ def test_motion_a_slow_logger_samples_coarsely_is_not_taken_for_jitter():
     # motion's curvature by as much as a 10 us jitter would move the readings; the cubic through four does not.
     from hdjoint.fmu import experiments
     rec = experiments.run("paper", duration=20.0)
-    found = reading_jitter(rec.time[::4], (rec.theta_m[::4], rec.theta_l[::4]), 0.95)
+    found = reading_jitter(rec.time[::4], (rec.theta_m[::4], rec.theta_l[::4]), COVERAGE)
     assert found.std == 0.0, found
+
+
+def test_diagnose_writes_its_corrected_set_without_the_jitter_unless_the_user_set_it(rec_csv, tmp_path, capsys):
+    # The corrected set is the joint's; the logger's jitter is each recording's own, measured where it is estimated.
+    import json
+    assert run_cli(capsys, "diagnose", rec_csv, "--out", tmp_path / "unstated")[0] == 0
+    for name in ("params.json", "params.ssv"):
+        assert "jsf_r_time" not in (tmp_path / "unstated" / name).read_text(), name
+    (tmp_path / "stated.json").write_text('{"jsf_r_time": 3e-5}')
+    assert run_cli(capsys, "diagnose", rec_csv, "--params", tmp_path / "stated.json", "--out", tmp_path / "stated")[0] == 0
+    assert json.loads((tmp_path / "stated" / "params.json").read_text())["jsf_r_time"] == 3e-5
