@@ -2,7 +2,7 @@
 
 The 27 joints of sensorless_accuracy.py (its cases, seeds, loads and run
 recordings), estimated with the truth's values of every parameter the model
-has (sensorless_accuracy.exact_set) and no calibration: what bounds any
+has and the current sensor's stated gain accuracy (sensorless_accuracy.exact_set), no calibration: what bounds any
 calibrated set. Error: RMS of tau_hat and tau_smooth against the truth's
 transmitted torque, in % of the run's torque span; coverage: the share of
 samples within +-2 sigma. The recordings are kept in a cache directory
@@ -86,7 +86,8 @@ def table(rows: list[tuple[str, int, dict, dict, dict | None]], beside: str, com
              stamp.generated_by(command),
              (f"Engine: {stamp.engine()}. The run recordings of sensorless_accuracy.py ({sensorless.DURATION:g} s, "
               "payload steps on even seeds, contact pushes on odd ones), estimated with the truth's values of every "
-              "parameter the model has, no calibration. Error: RMS against the true transmitted torque, % of the "
+              "parameter the model has and the current sensor's stated gain accuracy (jsf_current_gain), no "
+              "calibration. Error: RMS against the true transmitted torque, % of the "
               "run's torque span; coverage: share of samples within +-2 sigma, %. Encoders (motor, link): the "
               "truth's quantiser and interpolation error in counts. The reading-time jitter (jsf_r_time) is "
               "measured from each recording, as `hdjoint estimate` measures it."), "",

@@ -2,8 +2,8 @@
 RTS smoother (tau_hat, tau_smooth), a test oracle for the C++ code.
 
 Written from the model as documented in joint_state_filter.h and the README
-(state [theta_l, omega_l, delta, nu, w, r, g, e], two-mass dynamics driven by the
-current, linearly implicit trapezoidal step, floor-quantised encoder
+(state [theta_l, omega_l, delta, nu, w, r, g, e, s], two-mass dynamics driven by
+the current (its sensor's gain error undone by s), linearly implicit trapezoidal step, floor-quantised encoder
 readings), not from the C++ sources. Deliberately different in method where
 it can be: the Jacobian of the dynamics comes from complex-step
 differentiation (exact to round-off) instead of hand-derived partials, the
@@ -24,7 +24,10 @@ P0_ANGLE, P0_TORSION, P0_SPEED = 1e-2, 1e-3, 0.1
 P0_INERTIA, Q_INERTIA = 0.1, 1e-5
 # The compliance model's error e: its prior is what its walk spreads in a second, at least 1e-6 N.m.
 MIN_TORQUE_ERROR_STD = 1e-6
-N_STATES = 8
+# The current sensor's gain error s: prior jsf_current_gain (at least 1e-9); its variance grows by the
+# prior's over CURRENT_DRIFT_TIME (as documented).
+MIN_CURRENT_GAIN_STD, CURRENT_DRIFT_TIME = 1e-9, 600.0
+N_STATES = 9
 
 
 def joint_torque(p, x, i_m):
@@ -36,13 +39,13 @@ def joint_torque(p, x, i_m):
 
 
 def dynamics(p, x, i_m):
-    theta_l, omega_l, delta, nu, w, rate, g, e = x
+    theta_l, omega_l, delta, nu, w, rate, g, e, s = x
     tau = joint_torque(p, x, i_m)
     omega_m = p["N"] * (omega_l + nu)
     friction = p["Fc"] * np.tanh(omega_m / p["omega_fc"]) + p["Bm"] * omega_m
     link_acc = (tau - p["Bl"] * omega_l - p["mgl"] * np.sin(theta_l) - w) / (p["Jl"] * (1 + g))
-    motor_acc = (p["Kt"] * i_m - friction - tau / p["N"]) / (p["N"] * p["Jm"])  # of omega_l + nu
-    return np.array([omega_l, link_acc, nu, motor_acc - link_acc, rate, 0.0 * w, 0.0 * g, 0.0 * e])
+    motor_acc = (p["Kt"] * (1 + s) * i_m - friction - tau / p["N"]) / (p["N"] * p["Jm"])  # of omega_l + nu
+    return np.array([omega_l, link_acc, nu, motor_acc - link_acc, rate, 0.0 * w, 0.0 * g, 0.0 * e, 0.0 * s])
 
 
 def complex_step_jacobian(fun, x, h=1e-30):
@@ -71,7 +74,7 @@ def transition(p, x, i_m):
 def motor_noise_shape(p):
     """G G^T of a motor torque held over a sample, in (omega_l + nu) acceleration per N.m."""
     h = p["Ts"]
-    G = np.array([0.0, 0.0, h * h / 2, h, 0.0, 0.0, 0.0, 0.0]) / (p["N"] * p["Jm"])
+    G = np.array([0.0, 0.0, h * h / 2, h, 0.0, 0.0, 0.0, 0.0, 0.0]) / (p["N"] * p["Jm"])
     return np.outer(G, G)
 
 
@@ -84,7 +87,7 @@ def rest_friction_noise(p, x, i_m):
     unbalanced beyond REST_FRICTION_COUNTS of each encoder, fading as sech^2(omega_m/omega_fc)."""
     omega_m = p["N"] * (x[1] + x[3])
     friction = p["Fc"] * np.tanh(omega_m / p["omega_fc"]) + p["Bm"] * omega_m
-    held = p["Kt"] * i_m - friction - (joint_torque(p, x, i_m) - x[7]) / p["N"]
+    held = p["Kt"] * (1 + x[8]) * i_m - friction - (joint_torque(p, x, i_m) - x[7]) / p["N"]
     g = torque_gradient(p, x, i_m)
     qm, ql = TWO_PI / p["motor_counts"], TWO_PI / p["link_counts"]
     hidden = REST_FRICTION_COUNTS * (abs(g[2]) * qm / p["N"] + abs(g[0] - g[2]) * ql)
@@ -105,6 +108,7 @@ def noise(p):
     Q[5, 5] += p["jsf_q_load_rate"] ** 2
     Q[6, 6] += Q_INERTIA ** 2
     Q[7, 7] += p["jsf_q_torque"] ** 2
+    Q[8, 8] += p["jsf_current_gain"] ** 2 * p["Ts"] / CURRENT_DRIFT_TIME
     qm = TWO_PI / p["motor_counts"] if p["motor_counts"] > 0 else 0.0
     ql = TWO_PI / p["link_counts"] if p["link_counts"] > 0 else 0.0
     R = np.diag([max(p["jsf_r_theta_m"] ** 2 + qm * qm / 12, 1e-24), max(p["jsf_r_theta_l"] ** 2 + ql * ql / 12, 1e-24)])
@@ -129,7 +133,7 @@ def joint_filter(p, i_m, theta_m, theta_l):
     n = len(i_m)
     Q, R0, offset, quantisation = noise(p)
     repeated = np.column_stack([repeats(theta_m), repeats(theta_l)])
-    H = np.array([[p["N"], 0, p["N"], 0, 0, 0, 0, 0], [1.0, 0, 0, 0, 0, 0, 0, 0]])
+    H = np.array([[p["N"], 0, p["N"], 0, 0, 0, 0, 0, 0], [1.0, 0, 0, 0, 0, 0, 0, 0, 0]])
     out = {"tau_hat": np.empty(n), "tau_hat_std": np.empty(n)}
     store = {"x": [], "P": [], "x_prior": [], "P_prior": [], "F": []}
     x = P = None
@@ -142,7 +146,8 @@ def joint_filter(p, i_m, theta_m, theta_l):
             x[4] = joint_torque(p, x, i_m[0]) - p["mgl"] * np.sin(x[0])
             P = np.diag([P0_ANGLE**2, P0_SPEED**2, P0_TORSION**2, P0_SPEED**2, p["jsf_p0_load"] ** 2,
                          p["jsf_p0_load"] ** 2, P0_INERTIA**2,
-                         max(p["jsf_q_torque"] / np.sqrt(p["Ts"]), MIN_TORQUE_ERROR_STD) ** 2])
+                         max(p["jsf_q_torque"] / np.sqrt(p["Ts"]), MIN_TORQUE_ERROR_STD) ** 2,
+                         max(p["jsf_current_gain"], MIN_CURRENT_GAIN_STD) ** 2])
             F = np.eye(N_STATES)
         else:
             averaged = averaged_friction(p, P)

@@ -18,8 +18,12 @@ constexpr double kMinReadingVariance = 1e-24;
 // torsion rate in rad/s; angles in rad); the first update then sets them.
 constexpr double kP0Angle = 1e-2, kP0Torsion = 1e-3, kP0Speed = 0.1;
 constexpr double kMinTorqueErrorStd = 1e-6;  // N.m
+constexpr double kMinCurrentGainStd = 1e-9;  // a sensor taken as exact
 
 double resolution(double counts) { return counts > 0.0 ? kTwoPi / counts : 0.0; }
+
+// The current the motor carries, the sensor's gain error undone.
+double corrected_current(const JointState& x, double i_m) { return (1.0 + x(joint_state::kCurrentScale)) * i_m; }
 }  // namespace
 
 JointTorque joint_state_torque(const JointState& x, const JointInput& in, const Parameters& p) {
@@ -68,7 +72,9 @@ bool JointSystemModel::derivative(const State& x, const Control& u, State* dx, J
     const double inertia = q.Jl * (1.0 + x(kInertiaError));
     if (!(inertia > 0.0)) return false;
     const double a_l = (T.tau - q.Bl * omega_l - q.mgl * std::sin(theta_l) - w) / inertia;
-    const double a_m = (motor_torque(u.i_m, theta_m, u.t, q) - motor_friction(omega_m, q, scale) - T.tau / q.N) / NJm;
+    const double a_m =
+        (motor_torque(corrected_current(x, u.i_m), theta_m, u.t, q) - motor_friction(omega_m, q, scale) - T.tau / q.N) /
+        NJm;
     (*dx)(kThetaL) = omega_l;
     (*dx)(kOmegaL) = a_l;
     (*dx)(kDelta) = nu;
@@ -77,6 +83,7 @@ bool JointSystemModel::derivative(const State& x, const Control& u, State* dx, J
     (*dx)(kLoadRate) = 0.0;
     (*dx)(kInertiaError) = 0.0;
     (*dx)(kTorqueError) = 0.0;
+    (*dx)(kCurrentScale) = 0.0;
 
     const double cog = cogging_on(q) ? cogging_slope(theta_m, q) : 0.0;  // d/d theta_m
     const double friction = coulomb_friction_slope(omega_m, q, scale) + q.Bm;  // d/d omega_m
@@ -99,6 +106,7 @@ bool JointSystemModel::derivative(const State& x, const Control& u, State* dx, J
     (*J)(kNu, kLoad) = -(*J)(kOmegaL, kLoad);
     (*J)(kNu, kInertiaError) = -(*J)(kOmegaL, kInertiaError);
     (*J)(kNu, kTorqueError) = -1.0 / (q.N * NJm) - (*J)(kOmegaL, kTorqueError);
+    (*J)(kNu, kCurrentScale) = q.Kt * torque_constant_scale(u.t, q) * u.i_m / NJm;
     (*J)(kLoad, kLoadRate) = 1.0;
     return dx->allFinite() && J->allFinite();
 }
@@ -113,7 +121,7 @@ JointState JointSystemModel::step(const State& x, const Control& u, JointCovaria
     }
     // M = I - c*J, c = h/2. J's rows kThetaL, kDelta, kLoad are the
     // kinematic identities (d theta_l = omega_l, d delta = nu, d w = r) and
-    // rows kLoadRate, kInertiaError and kTorqueError are zero, so M z = y reduces to a 2x2 system in
+    // rows kLoadRate, kInertiaError, kTorqueError and the current's are zero, so M z = y reduces to a 2x2 system in
     // (z_omega_l, z_nu): solved in closed form (the same numbers as a general
     // LU up to round-off, at a fraction of its cost).
     using namespace joint_state;
@@ -122,21 +130,23 @@ JointState JointSystemModel::step(const State& x, const Control& u, JointCovaria
     const double a13 = -c * c * J(kOmegaL, kDelta) - c * J(kOmegaL, kNu);
     const double a31 = -c * c * J(kNu, kThetaL) - c * J(kNu, kOmegaL);
     const double a33 = 1.0 - c * c * J(kNu, kDelta) - c * J(kNu, kNu);
-    const double det = a11 * a33 - a13 * a31;
+    const double inv_det = 1.0 / (a11 * a33 - a13 * a31);  // one division for the ten solves
     auto solve = [&](const State& y) {
         State z;
         z(kLoadRate) = y(kLoadRate);
         z(kInertiaError) = y(kInertiaError);
         z(kTorqueError) = y(kTorqueError);
+        z(kCurrentScale) = y(kCurrentScale);
         z(kLoad) = y(kLoad) + c * z(kLoadRate);
         auto rhs = [&](int row) {
             return y(row) + c * (J(row, kThetaL) * y(kThetaL) + J(row, kDelta) * y(kDelta) + J(row, kLoad) * z(kLoad) +
                                  J(row, kLoadRate) * z(kLoadRate) + J(row, kInertiaError) * z(kInertiaError) +
-                                 J(row, kTorqueError) * z(kTorqueError));
+                                 J(row, kTorqueError) * z(kTorqueError) +
+                                 J(row, kCurrentScale) * z(kCurrentScale));
         };
         const double r1 = rhs(kOmegaL), r3 = rhs(kNu);
-        z(kOmegaL) = (a33 * r1 - a13 * r3) / det;
-        z(kNu) = (a11 * r3 - a31 * r1) / det;
+        z(kOmegaL) = (a33 * r1 - a13 * r3) * inv_det;
+        z(kNu) = (a11 * r3 - a31 * r1) * inv_det;
         z(kThetaL) = y(kThetaL) + c * z(kOmegaL);
         z(kDelta) = y(kDelta) + c * z(kNu);
         return z;
@@ -167,6 +177,7 @@ JointStateFilter::JointStateFilter(const Parameters& p) : p_(p) {
     Q_(kLoadRate, kLoadRate) = p.jsf_q_load_rate * p.jsf_q_load_rate;
     Q_(kInertiaError, kInertiaError) = kQInertiaError * kQInertiaError;
     Q_(kTorqueError, kTorqueError) = p.jsf_q_torque * p.jsf_q_torque;
+    Q_(kCurrentScale, kCurrentScale) = p.Ts / kCurrentDriftTime * p.jsf_current_gain * p.jsf_current_gain;
     // Floor quantisers: reading + q/2 is unbiased, variance q^2/12.
     const double qm = resolution(p.motor_counts), ql = resolution(p.link_counts);
     offset_m_ = 0.5 * qm;
@@ -187,6 +198,7 @@ JointStateFilter::JointStateFilter(const Parameters& p) : p_(p) {
     // What the walk spreads in a second (floored: a zero row would leave the
     // smoother's predicted covariance singular).
     sd0(kTorqueError) = std::max(p.jsf_q_torque / std::sqrt(p.Ts), kMinTorqueErrorStd);
+    sd0(kCurrentScale) = std::max(p.jsf_current_gain, kMinCurrentGainStd);
     const JointCovariance P0 = sd0.cwiseAbs2().asDiagonal();
     adapt_weight_ = p.jsf_load_adapt_time > 0.0 ? std::min(1.0, p.Ts / p.jsf_load_adapt_time) : 0.0;
     kalman_ = UnscentedKalmanFilter<kJointStates>(merwe_weights<kJointStates>(1.0, 2.0, 0.0), JointState::Zero(), P0);
@@ -213,7 +225,7 @@ JointCovariance JointStateFilter::process_noise() const {
         if (T.valid) {
             const double theta_m = p_.N * (x(kThetaL) + x(kDelta)), omega_m = p_.N * (x(kOmegaL) + x(kNu));
             const Parameters& q = system_.p;  // the friction law as the prediction averages it
-            const double held = motor_torque(previous_.i_m, theta_m, previous_.t, p_) -
+            const double held = motor_torque(corrected_current(x, previous_.i_m), theta_m, previous_.t, p_) -
                                 motor_friction(omega_m, q, friction_drift_scale(previous_.t, p_)) -
                                 (T.tau - x(kTorqueError)) / p_.N;
             // A count is twice the quantiser's offset.

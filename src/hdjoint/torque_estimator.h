@@ -113,7 +113,7 @@ private:
     EstimatorStatus predict_held(const EstimatorInputs& in, const ComplianceSample& c, std::string* message);
     // Outputs that show the compliance model only (before the filters start).
     void show_compliance(double tau, double dtheta_f);
-    static constexpr long kStateVersion = 8;  // 6: samples_held; 7: the torque error e; 8: the filter's hysteresis
+    static constexpr long kStateVersion = 9;  // 6: samples_held; 7: the torque error e; 8: the filter's hysteresis; 9: the current sensor's gain
 
     Parameters p_;
     PaperSystemModel system_;

@@ -25,12 +25,12 @@ TEST(JointStateFilter, JacobianMatchesCentralDifferences) {
     m.p = p;
     m.h = p.Ts;
     JointState x;
-    x << 0.3, 0.2, 2.5e-4, 0.01, 0.7, 2.0, 0.05, 0.02;
+    x << 0.3, 0.2, 2.5e-4, 0.01, 0.7, 2.0, 0.05, 0.02, 0.015;
     const JointInput u{0.4, 0.0, 0.0};
     JointState dx;
     JointCovariance J;
     ASSERT_TRUE(m.derivative(x, u, &dx, &J));
-    const double steps[kJointStates] = {1e-7, 1e-5, 1e-9, 1e-5, 1e-5, 1e-5, 1e-6, 1e-5};
+    const double steps[kJointStates] = {1e-7, 1e-5, 1e-9, 1e-5, 1e-5, 1e-5, 1e-6, 1e-5, 1e-6};
     for (int c = 0; c < kJointStates; ++c) {
         JointState hi = x, lo = x, dhi, dlo;
         JointCovariance unused;

@@ -66,6 +66,17 @@ def test_batch_equals_oracle_with_reading_time_jitter(short_recording, params):
     assert np.max(np.abs(a - _core.run_estimator(params, r.time, r.i_m, r.theta_m, r.theta_l)["tau_hat"])) > 1e-4
 
 
+def test_batch_equals_oracle_with_the_current_sensors_gain_learned(short_recording, params):
+    r, p = short_recording, {**params, "jsf_current_gain": 0.02}
+    current = 1.02 * r.i_m  # a sensor reading 2 % high
+    a = _core.run_estimator(p, r.time, current, r.theta_m, r.theta_l, smooth=True)
+    out, store = joint_filter(p, current, r.theta_m, r.theta_l)
+    out["tau_smooth"], _ = rts_smoother(p, current, store)
+    for name in ("tau_hat", "tau_hat_std", "tau_smooth"):
+        assert np.max(np.abs(a[name] - out[name])) <= 1e-9 * max(1.0, np.max(np.abs(out[name]))), name
+    assert np.max(np.abs(a["tau_hat"] - _core.run_estimator(params, r.time, current, r.theta_m, r.theta_l)["tau_hat"])) > 1e-4
+
+
 def test_fmu_equals_batch_exactly(short_recording, params, batch):
     r = short_recording
     fmu = run_estimator_fmu(r.time, r.i_m, r.theta_m, r.theta_l, params)
