@@ -320,26 +320,22 @@ FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointI
         accepted_ = in;
         started_ = true;
     } else {
-        // Only the state and covariance change in a prediction and update (a
-        // copy of the whole filter, its P0 and weights, cost a tenth of a step).
-        const JointState x_before = kalman_.state();
-        const JointCovariance P_before = kalman_.covariance();
+        // Only the state and covariance change in a prediction and update;
+        // the last record holds them as they were (load() keeps it so).
         average_friction_over_speed();
         const JointCovariance Q = process_noise();
         status = kalman_.predict(system_, previous_, Q);
-        record_.x_prior = kalman_.state();
-        record_.P_prior = kalman_.covariance();
+        record_prior();
         update = readable ? kalman_.update(measurement_, z, R + timing_covariance(), gate(z)) : decltype(update){};
         if (!readable || update.status == FilterStatus::SampleRejected) {
             // The current held since the last sample may be the outlier:
             // predict again with the last one that passed; if the readings
             // still fail, only predict (P grows, and so does tau_std).
             const double rejected_nis = update.nis;
-            kalman_.state() = x_before;
-            kalman_.covariance() = P_before;
+            kalman_.state() = record_.x;
+            kalman_.covariance() = record_.P;
             status = std::max(status, kalman_.predict(system_, accepted_, Q));
-            record_.x_prior = kalman_.state();
-            record_.P_prior = kalman_.covariance();
+            record_prior();
             if (readable) update = kalman_.update(measurement_, z, R + timing_covariance(), gate(z));
             readings_rejected_ = readable && update.status == FilterStatus::SampleRejected;
             update.nis = rejected_nis;
@@ -366,6 +362,11 @@ FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointI
         load_noise_scale_ += adapt_weight_ * (0.5 * update.nis - load_noise_scale_);
     if (!finite(in)) status = std::max(status, FilterStatus::SampleRejected);
     return std::max(status, update.status);
+}
+
+void JointStateFilter::record_prior() {
+    record_.x_prior = kalman_.state();
+    record_.P_prior = kalman_.covariance();
 }
 
 void JointStateFilter::follow_hysteresis(bool first) {
@@ -406,8 +407,7 @@ void JointStateFilter::predict_without_reading(const JointInput& in) {
     Q(kNu, kDelta) = Q(kDelta, kNu);
     Q(kNu, kNu) += a * a * p_.Ts * p_.Ts;
     kalman_.predict(system_, previous_, Q);
-    record_.x_prior = kalman_.state();
-    record_.P_prior = kalman_.covariance();
+    record_prior();
     record_.predicted = true;
     record_.F = kalman_.transition();
     record_.x = kalman_.state();
@@ -458,6 +458,8 @@ bool JointStateFilter::load(const std::vector<double>& in, std::size_t* cursor) 
     hysteresis_ = r[20];
     torsion_ = r[21];
     direction_ = r[22];
+    record_.x = kalman_.state();  // where the next step starts over from if it rejects a sample
+    record_.P = kalman_.covariance();
     *cursor += kSavedSize;
     return true;
 }

@@ -313,6 +313,7 @@ private:
     // none when the innovation is below kOutlierAngle.
     double gate(const Vector<2>& z) const;
     JointFilterRecord record_;
+    void record_prior();  // the prediction's x_prior and P_prior, for the smoother
     JointFilterOutput out_;
     bool started_ = false;
 };

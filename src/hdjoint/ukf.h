@@ -131,9 +131,10 @@ public:
             const Eigen::Matrix<double, NX, NZ> K =
                 solver.solve(Eigen::Matrix<double, NZ, NX>(Pxz.transpose())).transpose();
             x_ += K * result.innovation;
-            // Joseph-free form; symmetrised. K Pzz K^T = K Pxz^T.
-            P_ -= K * Pxz.transpose();
-            symmetrize(&P_);
+            // Joseph-free form, K Pzz K^T = K Pxz^T: symmetric, so one
+            // triangle is computed and mirrored.
+            for (int j = 0; j < NX; ++j)
+                for (int i = j; i < NX; ++i) P_(j, i) = P_(i, j) = 0.5 * (P_(i, j) + P_(j, i)) - K.row(i).dot(Pxz.row(j));
             return result;
         }
         SigmaPoints<NX> chi;
