@@ -31,6 +31,7 @@ from hdjoint.diagnosis.calibrate import calibrate
 from hdjoint.diagnosis.prepare import prepare
 from hdjoint.diagnosis.search import HypothesisSearch
 from hdjoint.diagnosis.effects import EFFECTS
+from hdjoint.diagnosis.effects.hysteresis import dahl_matching_bouc_wen
 from hdjoint.io.recording import read_recording, write_recording
 from hdjoint_truth.cases import EFFECT_CASES, draw, record
 
@@ -63,14 +64,12 @@ def _delay(joint) -> dict:
 
 
 def _hysteresis(joint) -> dict:
-    """The Dahl loop with the truth's saturation and initial slope. Bouc-Wen
-    (dz = A dx - beta |dx| z - gamma dx |z|) saturates at A/(beta + gamma)
-    while loading, with initial slope A: the Dahl law dz = sigma dx - sigma/H |dx| z
-    has the same loading branch (it unloads along another). Dahl-power
-    (dz/dx = r (1 - z/H sign dx)^2) has saturation H and initial slope r."""
+    """The Dahl loop with the truth's saturation and initial slope (Bouc-Wen:
+    dahl_matching_bouc_wen). Dahl-power (dz/dx = r (1 - z/H sign dx)^2) has
+    saturation H and initial slope r."""
     t = joint.truth
     if joint.form.hysteresis == "bouc_wen":
-        return {"hys_H": t["bw_A"] / (t["bw_beta"] + t["bw_gamma"]), "hys_sigma": t["bw_A"]}
+        return dahl_matching_bouc_wen(t["bw_A"], t["bw_beta"], t["bw_gamma"])
     return {"hys_H": t["dahl_H"], "hys_sigma": t["dahl_rate"]}
 
 

@@ -25,6 +25,9 @@ loaded by the transmitted torque while the nominal file keeps the paper's
 approximation; estimated with the nominal file and with the file
 `hdjoint diagnose` writes from another recording of the same joint.
 
+"Goal 3": each case again with the joint's exact parameters (its link model,
+and its hysteresis as the filter's Dahl law), what issue 39 asks of the filter itself.
+
 The tables go to stdout and to docs/results/estimators.md (with date and machine).
 
 Run: python benchmarks/joint_filter_cases.py [--quick]
@@ -42,6 +45,7 @@ from pathlib import Path
 import numpy as np
 
 from hdjoint import _core
+from hdjoint.diagnosis.effects.hysteresis import dahl_matching_bouc_wen
 from hdjoint.fmu import experiments
 from hdjoint.io import parameters
 import tuning
@@ -143,12 +147,19 @@ def run_case(case: Case, params: dict[str, float], duration: float | None) -> di
     # What limits the filter: the same recording with the joint's exact link model, and with the
     # current the joint was driven by (no sensor noise; jsf_current_noise near 0).
     exact_link = {**params, **{k: joint_parameters(case.encoders, case.hysteresis)[k] for k in LINK_MODEL_ERROR}}
+    # Goal 3 (issue 39): the filter with the joint's exact parameters, the hysteresis as its Dahl law.
+    exact = {**exact_link, **(dahl_matching_bouc_wen(HYSTERESIS["bw_A"], HYSTERESIS["bw_beta"], HYSTERESIS["bw_gamma"])
+                              if case.hysteresis else {})}
+    e = _core.run_estimator(parameters.for_estimator(exact), rec.time, rec.i_m, rec.theta_m, rec.theta_l, smooth=True)
+    exact_figures = {n: error_figures(e[n], truth) for n in ESTIMATES}
+    exact_coverage = {name: cover(e, name) for name in ("tau_hat", "tau_smooth")}
     limits = {}
     for label, p, current in (("exact link model", exact_link, rec.i_m),
                               ("noise-free current", {**params, "jsf_current_noise": 1e-4}, rec.extra["i_cmd"])):
         e = _core.run_estimator(parameters.for_estimator(p), rec.time, current, rec.theta_m, rec.theta_l, smooth=True)
         limits[label] = {n: error_figures(e[n], truth) for n in ("tau_hat", "tau_smooth")}
     return {"case": case, "figures": figures, "coverage": coverage, "seconds": rec.duration, "limits": limits,
+            "exact": {"figures": exact_figures, "coverage": exact_coverage},
             "rejected": int(np.sum(est["status"] == _core.STATUS_SAMPLE_REJECTED)), "samples": len(truth)}
 
 
@@ -183,6 +194,31 @@ def reduction_table(results) -> tuple[list[str], dict[str, float]]:
     lines.append("| **average** | " + " | ".join(f"{rms_mean[n]:.3f}" for n in ESTIMATES) + " | " +
                  " / ".join(f"**{means[n]:.0f} %**" for n in ESTIMATES[1:]) + " |")
     return lines, means
+
+
+def exact_parameters_table(results) -> tuple[list[str], str]:
+    """Goal 3 (issue 39): with the joint's exact parameters, each filter's reduction below the compliance model
+    and its +-2 sigma coverage per case, the averages and the cases outside the goals."""
+    lines = ["| case | tau_compliance RMS (N.m) | reduction: tau_hat / tau_smooth | coverage: tau_hat / tau_smooth |",
+             "|---|---|---|---|"]
+    reductions = {"tau_hat": [], "tau_smooth": []}
+    outside, worse = [], []
+    for r in results:
+        f, c = r["exact"]["figures"], r["exact"]["coverage"]
+        for n in reductions:
+            reductions[n].append(f[n].reduction_against(f["tau_compliance"]))
+            if not 93.0 <= c[n] <= 97.0:
+                outside.append(f"{r['case'].name} ({n} {c[n]:.1f} %)")
+        if f["tau_smooth"].rms > f["tau_hat"].rms:
+            worse.append(r["case"].name)
+        lines.append(f"| {r['case'].name} | {f['tau_compliance'].rms:.3f} | {reductions['tau_hat'][-1]:.0f} % / "
+                     f"{reductions['tau_smooth'][-1]:.0f} % | {c['tau_hat']:.1f} % / {c['tau_smooth']:.1f} % |")
+    means = {n: float(np.mean(v)) for n, v in reductions.items()}
+    lines.append(f"| **average** | | **{means['tau_hat']:.0f} % / {means['tau_smooth']:.0f} %** | |")
+    verdict = (f"With exact parameters: average reduction tau_hat {means['tau_hat']:.1f} % (goal 70), tau_smooth "
+               f"{means['tau_smooth']:.1f} % (goal 80); tau_smooth worse than tau_hat on: {', '.join(worse) or 'no case'}; "
+               f"coverage outside 93-97 %: {'; '.join(outside) or 'none'}.")
+    return lines, verdict
 
 
 def coverage_table(results) -> list[str]:
@@ -258,6 +294,9 @@ def main(argv=None):
                 ("Model is wrong: nominal file against the diagnosed one", wrong),
                 ("What limits the joint-state filter: reduction of tau_hat / tau_smooth below the compliance model "
                  "as run, with the joint's exact link model, with the noise-free current", limits_table(results))]
+    exact_lines, exact_verdict = exact_parameters_table(results)
+    sections.append(("Goal 3 (issue 39): the filter with the joint's exact parameters (link model; the hysteresis as "
+                     "the filter's Dahl law with the loop's first slope and height)", [exact_verdict, ""] + exact_lines))
     for title, lines in sections:
         print(f"\n{title}\n" + "\n".join(lines))
     summary = (f"average RMS reduction vs compliance: paper UKF {means['tau_ukf']:.1f} %, tau_hat "

@@ -31,6 +31,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from hdjoint.app import cli
+from hdjoint.diagnosis.effects.hysteresis import dahl_matching_bouc_wen
 from hdjoint.io import parameters
 from hdjoint.io.recording import write_recording
 from hdjoint.jobs.calibrate import placed_on
@@ -113,9 +114,7 @@ def exact_set(joint) -> dict:
     if joint.form.friction == "tanh":  # the truth's Coulomb law is the model's, smoothed over its form's speed
         exact["omega_fc"] = joint.form.omega_fc
     if exact.get("bw_A", 0.0) > 0.0 and not exact["hys_H"]:
-        # Bouc-Wen (n = 1) as the estimator's Dahl law: the same first slope A and saturation A/(beta + gamma).
-        exact["hys_sigma"] = exact["bw_A"]
-        exact["hys_H"] = exact["bw_A"] / (exact["bw_beta"] + exact["bw_gamma"])
+        exact.update(dahl_matching_bouc_wen(exact["bw_A"], exact["bw_beta"], exact["bw_gamma"]))
     return exact
 
 

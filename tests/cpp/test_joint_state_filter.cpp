@@ -182,6 +182,32 @@ TEST(JointStateFilter, OneOutlierCurrentIsRejectedVisiblyAndTheFilterRecovers) {
     EXPECT_NEAR(a.outputs().tau_hat_std, clean.outputs().tau_hat_std, 1e-6);
 }
 
+TEST(JointStateFilter, ARestoredFilterRejectsAnOutlierAsTheOriginalDoes) {
+    // A rejected sample starts over from the state before it: after load(),
+    // the loaded one (not the fresh filter's). The outlier current is held
+    // from the last sample before the save, so the first one after is rejected.
+    const Parameters p;
+    const std::vector<EstimatorInputs> inputs = moving_joint(p, 500);
+    auto held = [&](int k) { return JointInput{k == 399 ? 1e6 : inputs[k].i_m, 0.0, k * 1e-3}; };
+    JointStateFilter a(p);
+    for (int k = 0; k < 400; ++k) a.step(inputs[k].theta_m, inputs[k].theta_l, held(k));
+    std::vector<double> saved;
+    a.save(&saved);
+    JointStateFilter b(p);
+    std::size_t cursor = 0;
+    ASSERT_TRUE(b.load(saved, &cursor));
+    for (int k = 400; k < 500; ++k) {
+        const FilterStatus sa = a.step(inputs[k].theta_m, inputs[k].theta_l, held(k));
+        const FilterStatus sb = b.step(inputs[k].theta_m, inputs[k].theta_l, held(k));
+        if (k == 400) {
+            EXPECT_EQ(sa, FilterStatus::SampleRejected);
+        }
+        ASSERT_EQ(sa, sb) << k;
+        ASSERT_EQ(a.output().tau, b.output().tau) << k;
+        ASSERT_EQ(a.output().tau_std, b.output().tau_std) << k;
+    }
+}
+
 TEST(JointStateFilter, SmootherEndsOnTheFilterAndBeatsItInBetween) {
     Parameters p;
     JointPlant plant(p);

@@ -24,6 +24,14 @@ def _loop_that_never_closes(p: dict, torsion_span: float) -> str | None:
             f"{width:.2g} rad, more than a quarter of the recorded torsion ({torsion_span:.2g} rad): a spring, not a loop")
 
 
+def dahl_matching_bouc_wen(A: float, beta: float, gamma: float) -> dict[str, float]:
+    """The model's Dahl loop (hys_H, hys_sigma) for a Bouc-Wen loop (n = 1,
+    dz = A dx - beta |dx| z - gamma dx |z|): that saturates at A/(beta + gamma)
+    while loading, with initial slope A, as the Dahl law dz = sigma dx -
+    sigma/H |dx| z does with H and sigma (it unloads along another branch)."""
+    return {"hys_H": A / (beta + gamma), "hys_sigma": A}
+
+
 class Hysteresis(Effect):
     def degenerate(self, p: dict, scale: RecordingScale) -> str | None:
         """A fit that is not a loop: one that never closes, or one too low to
