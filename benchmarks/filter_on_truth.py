@@ -2,7 +2,7 @@
 
 The 27 joints of sensorless_accuracy.py (its cases, seeds, loads and run
 recordings), estimated with the truth's values of every parameter the model
-has and the current sensor's stated gain accuracy (sensorless_accuracy.exact_set), no calibration: what bounds any
+has (sensorless_accuracy.exact_set) and the current sensor's stated gain accuracy, no calibration: what bounds any
 calibrated set. Error: RMS of tau_hat and tau_smooth against the truth's
 transmitted torque, in % of the run's torque span; coverage: the share of
 samples within +-2 sigma. The recordings are kept in a cache directory
@@ -24,7 +24,7 @@ import numpy as np
 from hdjoint import _core
 from hdjoint.io import parameters
 from hdjoint.jobs.estimate import READING_JITTER, measured_reading_jitter
-from hdjoint_truth.cases import record
+from hdjoint_truth.cases import CURRENT_GAIN_BOUND, record
 
 import sensorless_accuracy as sensorless
 import stamp
@@ -44,7 +44,10 @@ def recording(case: sensorless.Case, seed: int, cache: Path) -> dict:
         np.savez(path, time=rec.time, i_m=rec.i_m, theta_m=rec.theta_m, theta_l=rec.theta_l,
                  tau=rec.extra["tau_joint"])
     data = dict(np.load(path))
-    return {**data, "exact": sensorless.exact_set(joint), "load": joint.setups[1].load,
+    # The filter itself: the exact set and the current sensor's gain accuracy as its datasheet states it (the
+    # std of the truth's uniform draw within the bound), which the filter learns against.
+    exact = {**sensorless.exact_set(joint), "jsf_current_gain": CURRENT_GAIN_BOUND / np.sqrt(3.0)}
+    return {**data, "exact": exact, "load": joint.setups[1].load,
             "encoders": [f"{e.rounding} {e.interpolation:.2f}" for e in
                          (joint.setups[1].motor_encoder, joint.setups[1].link_encoder)]}
 

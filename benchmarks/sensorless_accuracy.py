@@ -38,7 +38,7 @@ from hdjoint.jobs.calibrate import placed_on
 from hdjoint.jobs.inputs import read_recording
 from hdjoint.jobs.estimate import as_written
 from hdjoint.jobs.joint_scale import SCALE_EVIDENCE_Z
-from hdjoint_truth.cases import CURRENT_GAIN_BOUND, EFFECT_CASES, JITTERED, TruthCase, draw, record
+from hdjoint_truth.cases import EFFECT_CASES, JITTERED, TruthCase, draw, record
 
 import diagnosis_independent as independent
 import stamp
@@ -104,13 +104,12 @@ def joint_for(case: Case, seed: int, duration: float):
 
 def exact_set(joint) -> dict:
     """The truth's value of every parameter the model has; the wave generator loaded by
-    tau_f/N, as the truth's is; Bouc-Wen hysteresis as the estimator's Dahl law; the current
-    sensor's gain accuracy as its datasheet states it (the std of a uniform draw within the
-    bound). An effect in a form the model lacks stays out."""
+    tau_f/N, as the truth's is; Bouc-Wen hysteresis as the estimator's Dahl law. An effect
+    in a form the model lacks stays out. The estimator's settings are the calibrated set's, so
+    the two compare like for like."""
     exact = dict(joint.nominal)
     exact.update({k: float(v) for k, v in joint.truth.items() if k in parameters.table()})
     exact["wg_load"] = 1.0
-    exact["jsf_current_gain"] = CURRENT_GAIN_BOUND / np.sqrt(3.0)
     if joint.form.friction == "tanh":  # the truth's Coulomb law is the model's, smoothed over its form's speed
         exact["omega_fc"] = joint.form.omega_fc
     if exact.get("bw_A", 0.0) > 0.0 and not exact["hys_H"]:
