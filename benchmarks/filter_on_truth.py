@@ -2,7 +2,7 @@
 
 The 27 joints of sensorless_accuracy.py (its cases, seeds, loads and run
 recordings), estimated with the truth's values of every parameter the model
-has (sensorless_accuracy.exact_set) and the current sensor's stated gain accuracy, no calibration: what bounds any
+has (sensorless_accuracy.exact_set) and the current sensor's stated accuracy, no calibration: what bounds any
 calibrated set. Error: RMS of tau_hat and tau_smooth against the truth's
 transmitted torque, in % of the run's torque span; coverage: the share of
 samples within +-2 sigma. The recordings are kept in a cache directory
@@ -24,7 +24,7 @@ import numpy as np
 from hdjoint import _core
 from hdjoint.io import parameters
 from hdjoint.jobs.estimate import READING_JITTER, measured_reading_jitter
-from hdjoint_truth.cases import CURRENT_GAIN_BOUND, record
+from hdjoint_truth.cases import CURRENT_GAIN_BOUND, CURRENT_OFFSET_BOUND, record
 
 import sensorless_accuracy as sensorless
 import stamp
@@ -44,9 +44,10 @@ def recording(case: sensorless.Case, seed: int, cache: Path) -> dict:
         np.savez(path, time=rec.time, i_m=rec.i_m, theta_m=rec.theta_m, theta_l=rec.theta_l,
                  tau=rec.extra["tau_joint"])
     data = dict(np.load(path))
-    # The filter itself: the exact set and the current sensor's gain accuracy as its datasheet states it (the
-    # std of the truth's uniform draw within the bound), which the filter learns against.
-    exact = {**sensorless.exact_set(joint), "jsf_current_gain": CURRENT_GAIN_BOUND / np.sqrt(3.0)}
+    # The filter itself: the exact set and the current sensor's accuracy as its datasheet states it (the stds of
+    # the truth's uniform draws within the bounds): the gain the filter learns, the offset widens its deviations.
+    exact = {**sensorless.exact_set(joint), "jsf_current_gain": CURRENT_GAIN_BOUND / np.sqrt(3.0),
+             "jsf_current_offset": CURRENT_OFFSET_BOUND / np.sqrt(3.0)}
     return {**data, "exact": exact, "load": joint.setups[1].load,
             "encoders": [f"{e.rounding} {e.interpolation:.2f}" for e in
                          (joint.setups[1].motor_encoder, joint.setups[1].link_encoder)]}
@@ -89,8 +90,8 @@ def table(rows: list[tuple[str, int, dict, dict, dict | None]], beside: str, com
              stamp.generated_by(command),
              (f"Engine: {stamp.engine()}. The run recordings of sensorless_accuracy.py ({sensorless.DURATION:g} s, "
               "payload steps on even seeds, contact pushes on odd ones), estimated with the truth's values of every "
-              "parameter the model has and the current sensor's stated gain accuracy (jsf_current_gain), no "
-              "calibration. Error: RMS against the true transmitted torque, % of the "
+              "parameter the model has and the current sensor's stated accuracy (jsf_current_gain, jsf_current_offset), "
+              "no calibration. Error: RMS against the true transmitted torque, % of the "
               "run's torque span; coverage: share of samples within +-2 sigma, %. Encoders (motor, link): the "
               "truth's quantiser and interpolation error in counts. The reading-time jitter (jsf_r_time) is "
               "measured from each recording, as `hdjoint estimate` measures it."), "",

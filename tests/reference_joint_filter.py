@@ -128,6 +128,12 @@ def repeats(readings):
     return count
 
 
+def unseen_variance(p):
+    """The current sensor's offset on the transmitted torque, N*Kt*jsf_current_offset, as a variance: no state
+    can tell it from a compliance error (as documented)."""
+    return (p["N"] * p["Kt"] * p["jsf_current_offset"]) ** 2
+
+
 def joint_filter(p, i_m, theta_m, theta_l):
     """Filter over samples; returns tau_hat, tau_hat_std and what the smoother needs."""
     n = len(i_m)
@@ -170,7 +176,7 @@ def joint_filter(p, i_m, theta_m, theta_l):
         store["P"].append(P.copy())
         g = torque_gradient(p, x, i_m[k])
         out["tau_hat"][k] = joint_torque(p, x, i_m[k])
-        out["tau_hat_std"][k] = np.sqrt(g @ P @ g)
+        out["tau_hat_std"][k] = np.sqrt(g @ P @ g + unseen_variance(p))
     return out, store
 
 
@@ -186,5 +192,5 @@ def rts_smoother(p, i_m, store):
             Ps = store["P"][k] + C @ (Ps - store["P_prior"][k + 1]) @ C.T
         g = torque_gradient(p, xs, i_m[k])
         tau[k] = joint_torque(p, xs, i_m[k])
-        std[k] = np.sqrt(g @ Ps @ g)
+        std[k] = np.sqrt(g @ Ps @ g + unseen_variance(p))
     return tau, std

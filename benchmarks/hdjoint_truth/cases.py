@@ -26,9 +26,9 @@ from hdjoint_truth.simulate import Controller, Setup, simulate
 
 # What the user believes may be off by up to this much, in the truth (relative).
 NOMINAL_ERROR = 0.10
-# The current sensor's gain error is drawn within this bound (relative): a Hall
-# sensor's datasheet accuracy, what a user can state.
-CURRENT_GAIN_BOUND = 0.02
+# The current sensor's gain error (relative) and offset (A) are drawn within
+# these bounds: a Hall sensor's datasheet accuracy, what a user can state.
+CURRENT_GAIN_BOUND, CURRENT_OFFSET_BOUND = 0.02, 0.01
 JITTERED = ("Kt", "Jm", "Bm", "Fc", "Kf", "Cf", "Kw", "al1", "bl1", "aw1", "bw1", "aw2", "bw2", "Jl", "Bl", "mgl")
 KINDS = tuple(EXCITATIONS)
 
@@ -148,7 +148,7 @@ def draw(case: TruthCase, seed: int, duration: float = 30.0, recordings: int = 2
         truth[name] *= float(1.0 + rng.uniform(-bound, bound))
     truth["Df"] = float(rng.uniform(2.0, 8.0))  # structural damping: the nominal model has none
     form = _draw_form(rng, case.present, nominal["Jm"])
-    sensor = CurrentSensor(gain_error=float(rng.uniform(-CURRENT_GAIN_BOUND, CURRENT_GAIN_BOUND)), offset=float(rng.uniform(-0.01, 0.01)),
+    sensor = CurrentSensor(gain_error=float(rng.uniform(-CURRENT_GAIN_BOUND, CURRENT_GAIN_BOUND)), offset=float(rng.uniform(-CURRENT_OFFSET_BOUND, CURRENT_OFFSET_BOUND)),
                            white=float(rng.uniform(0.005, 0.015)), coloured=float(rng.uniform(0.0, 0.01)),
                            colour_time=float(rng.uniform(0.005, 0.05)))
     for effect in case.present:

@@ -258,6 +258,11 @@ double JointStateFilter::torque_variance(const JointTorque& T, const JointCovari
            2.0 * (T.d_theta_l * P(kThetaL, kTorqueError) + T.d_delta * P(kDelta, kTorqueError));
 }
 
+double JointStateFilter::unseen_variance(const Parameters& p) {
+    const double offset = p.N * p.Kt * p.jsf_current_offset;
+    return offset * offset;
+}
+
 Matrix<2> JointStateFilter::reading_covariance(double theta_m, double theta_l) {
     // A reading equal to the last one carries the same quantisation error
     // (the angle stayed inside one count), not a fresh one: the k-th repeat's
@@ -389,7 +394,7 @@ bool JointStateFilter::publish_state() {
     const JointTorque T = system_.torque(kalman_.state(), previous_);
     if (T.valid) {
         out_.tau = T.tau;
-        out_.tau_std = std::sqrt(std::max(torque_variance(T, kalman_.covariance()), 0.0));
+        out_.tau_std = std::sqrt(std::max(torque_variance(T, kalman_.covariance()), 0.0) + unseen_variance(p_));
     }
     out_.load = kalman_.state()(joint_state::kLoad);
     return T.valid;
@@ -511,7 +516,8 @@ RtsBackward::Torque RtsBackward::step(const JointFilterRecord& r) {
     next_ = r;
     has_next_ = true;
     const JointTorque T = joint_state_torque(xs_, r.input, p_);
-    return {T.valid ? T.tau : std::nan(""), std::sqrt(std::max(JointStateFilter::torque_variance(T, Ps_), 0.0))};
+    return {T.valid ? T.tau : std::nan(""), std::sqrt(std::max(JointStateFilter::torque_variance(T, Ps_), 0.0) +
+                                                      JointStateFilter::unseen_variance(p_))};
 }
 
 SmoothedTorque smooth_joint_states(const std::vector<JointFilterRecord>& records, const Parameters& p) {

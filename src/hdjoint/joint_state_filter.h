@@ -34,7 +34,8 @@
 //                                 out: a constant motor torque is also the friction at
 //                                 rest and a constant compliance error: learned, it took
 //                                 them in and biased tau_hat on the independent truth
-//                                 (benchmarks/filter_on_truth.py).
+//                                 (benchmarks/filter_on_truth.py). Its stated accuracy
+//                                 widens tau_std instead (unseen_variance).
 //   d(w)/dt = r, d(r)/dt = noise, d(g)/dt = 0, d(e)/dt = noise, s drifts slowly
 // Dynamics, with tau(x) the transmitted torque of the corrected compliance
 // chain (eq. 3-8 with kinematic error, wave generator, backlash, the
@@ -53,7 +54,8 @@
 // quantisers: the reading plus q/2 is unbiased with variance q^2/12; a
 // reading that repeats the last one k times over has (1 + 0.02 k) q^2/12
 // (its quantisation error is the same, not a fresh one; kRepeatedReadingWeight).
-// Output: tau(x) and its standard deviation from P.
+// Output: tau(x) and its standard deviation from P, with the variance of the
+// current sensor's offset (jsf_current_offset), which no state can see.
 #include <cstddef>
 #include <vector>
 
@@ -259,6 +261,9 @@ public:
 
     // The variance of a torque at a state of covariance P (first order).
     static double torque_variance(const JointTorque& T, const JointCovariance& P);
+    // What no state sees: the current sensor's offset, N*Kt*jsf_current_offset
+    // on the transmitted torque (e takes it in), as a variance.
+    static double unseen_variance(const Parameters& p);
     void save(std::vector<double>* out) const;
     bool load(const std::vector<double>& in, std::size_t* cursor);
 

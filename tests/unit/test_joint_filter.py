@@ -77,6 +77,16 @@ def test_batch_equals_oracle_with_the_current_sensors_gain_learned(short_recordi
     assert np.max(np.abs(a["tau_hat"] - _core.run_estimator(params, r.time, current, r.theta_m, r.theta_l)["tau_hat"])) > 1e-4
 
 
+def test_batch_equals_oracle_with_the_current_offset_stated(short_recording, params):
+    r, p = short_recording, {**params, "jsf_current_offset": 0.005}
+    a = _core.run_estimator(p, r.time, r.i_m, r.theta_m, r.theta_l, smooth=True)
+    out, store = joint_filter(p, r.i_m, r.theta_m, r.theta_l)
+    out["tau_smooth"], out["tau_smooth_std"] = rts_smoother(p, r.i_m, store)
+    for name in ("tau_hat_std", "tau_smooth_std"):
+        assert np.max(np.abs(a[name] - out[name])) <= 1e-9 * max(1.0, np.max(np.abs(out[name]))), name
+    assert np.min(a["tau_hat_std"]) >= p["N"] * p["Kt"] * 0.005
+
+
 def test_fmu_equals_batch_exactly(short_recording, params, batch):
     r = short_recording
     fmu = run_estimator_fmu(r.time, r.i_m, r.theta_m, r.theta_l, params)
