@@ -319,8 +319,7 @@ FilterStatus JointStateFilter::step(double theta_m, double theta_l, const JointI
         kalman_.covariance() = kalman_.initial_covariance();
         record_.predicted = false;
         record_.F.setIdentity();
-        record_.x_prior = kalman_.state();
-        record_.P_prior = kalman_.covariance();
+        record_prior();
         update = kalman_.update(measurement_, z, R);  // at rest: no timing term
         accepted_ = in;
         started_ = true;

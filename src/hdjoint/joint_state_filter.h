@@ -317,6 +317,8 @@ private:
     // The NIS gate for readings z at the predicted state: kOutlierGate, or
     // none when the innovation is below kOutlierAngle.
     double gate(const Vector<2>& z) const;
+    // The last sample: the smoother's record, and the (x, P) a rejected
+    // sample starts over from.
     JointFilterRecord record_;
     void record_prior();  // the prediction's x_prior and P_prior, for the smoother
     JointFilterOutput out_;

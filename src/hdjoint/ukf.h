@@ -8,6 +8,7 @@
 // one) and reported as a status instead of aborting, and the gain comes from
 // a solve, never an explicit inverse.
 #include <limits>
+#include <type_traits>
 
 #include "sigma_points.h"
 
@@ -20,6 +21,23 @@ enum class FilterStatus {
     UpdateSkipped,       // innovation covariance singular: measurement ignored
     SampleRejected,      // the innovation failed the outlier gate: measurement (or input) ignored
 };
+
+// What a system or measurement model may declare: kExtended (an analytic
+// Jacobian), kLinear, kMovingStates (F's rows from it on are the identity's).
+namespace model_traits {
+template <class Model, template <class> class Member, class = void>
+struct Declared : std::false_type {};
+template <class Model, template <class> class Member>
+struct Declared<Model, Member, std::void_t<Member<Model>>> : std::true_type {};
+template <class Model, template <class> class Member>
+constexpr bool declares = Declared<Model, Member>::value;
+template <class M>
+using ExtendedFlag = decltype(M::kExtended);
+template <class M>
+using LinearFlag = decltype(M::kLinear);
+template <class M>
+using MovingStates = decltype(M::kMovingStates);
+}  // namespace model_traits
 
 template <int NX>
 class UnscentedKalmanFilter {
@@ -186,35 +204,22 @@ private:
         }
         symmetrize(&P_);
     }
+    // A model's optional declarations (model_traits), or their defaults.
     template <class System>
     static constexpr int moving_states() {
-        if constexpr (requires_moving_states<System>(0)) return System::kMovingStates;
-        return NX;
+        if constexpr (model_traits::declares<System, model_traits::MovingStates>) return System::kMovingStates;
+        else return NX;
     }
-    template <class System>
-    static constexpr auto requires_moving_states(int) -> decltype(System::kMovingStates, bool()) { return true; }
-    template <class System>
-    static constexpr bool requires_moving_states(...) { return false; }
-
-    template <class System>
+    template <class Model>
     static constexpr bool is_extended() {
-        if constexpr (requires_extended_flag<System>(0)) return System::kExtended;
-        return false;
+        if constexpr (model_traits::declares<Model, model_traits::ExtendedFlag>) return Model::kExtended;
+        else return false;
     }
-    template <class System>
-    static constexpr auto requires_extended_flag(int) -> decltype(System::kExtended, bool()) { return true; }
-    template <class System>
-    static constexpr bool requires_extended_flag(...) { return false; }
-
-    template <class System>
+    template <class Model>
     static constexpr bool is_linear() {
-        if constexpr (requires_linear_flag<System>(0)) return System::kLinear;
-        return false;
+        if constexpr (model_traits::declares<Model, model_traits::LinearFlag>) return Model::kLinear;
+        else return false;
     }
-    template <class System>
-    static constexpr auto requires_linear_flag(int) -> decltype(System::kLinear, bool()) { return true; }
-    template <class System>
-    static constexpr bool requires_linear_flag(...) { return false; }
 
     // Sigma points from the current mean and covariance, repairing or
     // resetting P when it cannot be factorised.
