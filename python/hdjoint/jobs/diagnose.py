@@ -105,8 +105,8 @@ def screened_recordings(recs):
 def write_diagnosis(out, doc: dict, page: str, corrected: dict) -> None:
     """Stage the four files (CORRECTED the set params.json and .ssv hold) in
     a folder inside OUT, then move them in, so a failure (a full disk) never
-    leaves a half-written OUT, nor an OUT this run created; a run killed outright leaves its staging folder, which the
-    next run removes."""
+    leaves a half-written OUT, nor an OUT this run created; a run killed
+    outright leaves its staging folder, which the next run removes."""
     import json
     import shutil
     from hdjoint.io import parameters
