@@ -153,13 +153,17 @@ def run_case(case: Case, params: dict[str, float], duration: float | None) -> di
     e = _core.run_estimator(parameters.for_estimator(exact), rec.time, rec.i_m, rec.theta_m, rec.theta_l, smooth=True)
     exact_figures = {n: error_figures(e[n], truth) for n in ESTIMATES}
     exact_coverage = {name: cover(e, name) for name in ("tau_hat", "tau_smooth")}
+    # What the exact set reaches when the current the joint was driven by is known: the current sensor's share.
+    e = _core.run_estimator(parameters.for_estimator({**exact, "jsf_current_noise": 1e-4}), rec.time,
+                            rec.extra["i_cmd"], rec.theta_m, rec.theta_l, smooth=True)
+    exact_clean = {n: error_figures(e[n], truth) for n in ESTIMATES}
     limits = {}
     for label, p, current in (("exact link model", exact_link, rec.i_m),
                               ("noise-free current", {**params, "jsf_current_noise": 1e-4}, rec.extra["i_cmd"])):
         e = _core.run_estimator(parameters.for_estimator(p), rec.time, current, rec.theta_m, rec.theta_l, smooth=True)
         limits[label] = {n: error_figures(e[n], truth) for n in ("tau_hat", "tau_smooth")}
     return {"case": case, "figures": figures, "coverage": coverage, "seconds": rec.duration, "limits": limits,
-            "exact": {"figures": exact_figures, "coverage": exact_coverage},
+            "exact": {"figures": exact_figures, "coverage": exact_coverage, "noise-free current": exact_clean},
             "rejected": int(np.sum(est["status"] == _core.STATUS_SAMPLE_REJECTED)), "samples": len(truth)}
 
 
@@ -197,26 +201,31 @@ def reduction_table(results) -> tuple[list[str], dict[str, float]]:
 
 
 def exact_parameters_table(results) -> tuple[list[str], str]:
-    """Goal 3 (issue 39): with the joint's exact parameters, each filter's reduction below the compliance model
-    and its +-2 sigma coverage per case, the averages and the cases outside the goals."""
-    lines = ["| case | tau_compliance RMS (N.m) | reduction: tau_hat / tau_smooth | coverage: tau_hat / tau_smooth |",
-             "|---|---|---|---|"]
-    reductions = {"tau_hat": [], "tau_smooth": []}
+    """Goal 3 (issue 39): with the joint's exact parameters, each filter's reduction below the compliance model,
+    beside what it reaches with the noise-free current, and its +-2 sigma coverage per case. The reduction
+    goals hold for fine encoders (the issue's condition): the verdict judges those cases, each one."""
+    lines = ["| case | tau_compliance RMS (N.m) | reduction: tau_hat / tau_smooth | with the noise-free current | "
+             "coverage: tau_hat / tau_smooth |", "|---|---|---|---|---|"]
+    fine = {"tau_hat": [], "tau_smooth": []}
     outside, worse = [], []
     for r in results:
-        f, c = r["exact"]["figures"], r["exact"]["coverage"]
-        for n in reductions:
-            reductions[n].append(f[n].reduction_against(f["tau_compliance"]))
-            if not 93.0 <= c[n] <= 97.0:
-                outside.append(f"{r['case'].name} ({n} {c[n]:.1f} %)")
+        f, c, clean = r["exact"]["figures"], r["exact"]["coverage"], r["exact"]["noise-free current"]
+        cut = {n: f[n].reduction_against(f["tau_compliance"]) for n in fine}
+        if r["case"].encoders == "default":
+            for n in fine:
+                fine[n].append(cut[n])
+        outside += [f"{r['case'].name} ({n} {c[n]:.1f} %)" for n in fine if not 93.0 <= c[n] <= 97.0]
         if f["tau_smooth"].rms > f["tau_hat"].rms:
             worse.append(r["case"].name)
-        lines.append(f"| {r['case'].name} | {f['tau_compliance'].rms:.3f} | {reductions['tau_hat'][-1]:.0f} % / "
-                     f"{reductions['tau_smooth'][-1]:.0f} % | {c['tau_hat']:.1f} % / {c['tau_smooth']:.1f} % |")
-    means = {n: float(np.mean(v)) for n, v in reductions.items()}
-    lines.append(f"| **average** | | **{means['tau_hat']:.0f} % / {means['tau_smooth']:.0f} %** | |")
-    verdict = (f"With exact parameters: average reduction tau_hat {means['tau_hat']:.1f} % (goal 70), tau_smooth "
-               f"{means['tau_smooth']:.1f} % (goal 80); tau_smooth worse than tau_hat on: {', '.join(worse) or 'no case'}; "
+        lines.append(f"| {r['case'].name} | {f['tau_compliance'].rms:.3f} | {cut['tau_hat']:.0f} % / "
+                     f"{cut['tau_smooth']:.0f} % | " + " / ".join(
+                         f"{clean[n].reduction_against(clean['tau_compliance']):.0f} %" for n in fine) +
+                     f" | {c['tau_hat']:.1f} % / {c['tau_smooth']:.1f} % |")
+    met = {n: sum(v >= goal for v in fine[n]) for n, goal in (("tau_hat", 70.0), ("tau_smooth", 80.0))}
+    verdict = (f"With exact parameters and fine encoders ({len(fine['tau_hat'])} cases): tau_hat "
+               f"{min(fine['tau_hat']):.0f}-{max(fine['tau_hat']):.0f} % below the compliance model, at least 70 % on "
+               f"{met['tau_hat']}; tau_smooth {min(fine['tau_smooth']):.0f}-{max(fine['tau_smooth']):.0f} %, at least "
+               f"80 % on {met['tau_smooth']}. tau_smooth worse than tau_hat on: {', '.join(worse) or 'no case'}; "
                f"coverage outside 93-97 %: {'; '.join(outside) or 'none'}.")
     return lines, verdict
 
