@@ -37,6 +37,7 @@ from hdjoint.io.recording import write_recording
 from hdjoint.jobs.calibrate import placed_on
 from hdjoint.jobs.inputs import read_recording
 from hdjoint.jobs.estimate import as_written
+from hdjoint.diagnosis.rules import INTERVAL
 from hdjoint.jobs.joint_scale import SCALE_EVIDENCE_Z
 from hdjoint_truth.cases import EFFECT_CASES, JITTERED, TruthCase, draw, record
 
@@ -273,6 +274,12 @@ def _count(rows: list[dict], goal: str) -> str:
     return f"{sum(judged)}/{len(judged)}"
 
 
+def _scale_holds(rows: list[dict]) -> str:
+    """In how many calibrations Kt's interval (the joint torque scale's, jobs/joint_scale.py) holds the truth's Kt."""
+    kt = [r["parameters"]["Kt"] for r in rows if r["parameters"].get("Kt", {}).get("lo") is not None]
+    return f"{sum(e['lo'] <= e['truth'] <= e['hi'] for e in kt)}/{len(kt)}"
+
+
 def write_table(rows: list[dict]) -> str:
     durations = ", ".join(sorted({f"{r['duration']:g}" for r in rows}))
     lines = ["# tau_hat after a sensorless calibration, on the independent truth", "",
@@ -297,7 +304,9 @@ def write_table(rows: list[dict]) -> str:
              "| worst error: " + " / ".join(COLUMNS) + " (% of span) | "
              + " / ".join(f"{100 * max(_scored(rows, s), default=float('nan')):.2f}" for s in COLUMNS) + " |",
              *(f"| calibrated (jobs/calibrate.py's rule) against {rule} | {_against(rows, rule)} |"
-               for rule in OTHER_RULES), "",
+               for rule in OTHER_RULES),
+             f"| Kt, set by the joint's torque scale: its {100 * INTERVAL:g} % interval holds the truth's value | "
+             f"{_scale_holds(rows)} |", "",
              ("Far off: the nominal set lacks gravity, the flexspline is 2.5x softer, or the link 40 % heavier. "
               "Calibrated: every calibrated parameter at its estimate (the maximum a posteriori), the joint's "
               "torque scale set by all tolerances together, each estimate pulling no harder beyond "

@@ -15,7 +15,8 @@ import pytest
 from cli_helpers import run_cli
 from hdjoint.io import parameters
 from hdjoint.io.recording import write_recording
-from hdjoint.jobs.joint_scale import SCALE_EVIDENCE_Z, joint_scale, scaled, torque_power
+from hdjoint.jobs.joint_scale import SCALE_EVIDENCE_Z, joint_scale, scale_interval, scaled, torque_power
+from scipy.stats import norm
 from hdjoint_truth.cases import CONTROL_CASES, draw, record
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
@@ -59,6 +60,11 @@ def test_a_sensorless_calibration_is_used_at_its_estimates(joint_files, capsys):
     assert used["a0"] != nominal["a0"]  # placed on the run
     assert all(r["unit"] is not None and r["description"] for r in rows.values())
     assert f"no harder beyond {SCALE_EVIDENCE_Z:g} tolerances" in document["rule"]  # the rule says the scale's cap
+    # The scale has its interval, and Kt, which it sets, has it as its own; the summary says so in words.
+    lo, hi = document["joint_scale_interval"]
+    assert lo < scale < hi and rows["Kt"]["lo"] == pytest.approx(nominal["Kt"] * lo)
+    assert rows["Kt"]["hi"] == pytest.approx(nominal["Kt"] * hi) and rows["Kt"]["identified"] is False
+    assert f"interval {lo:.3f}-{hi:.3f}" in out and "cannot tell it" in out
     # The nominal file states jsf_r_time (a full set): the calibrated set keeps it, and the document says so.
     assert used["jsf_r_time"] == nominal["jsf_r_time"] and "jsf_r_time" in json.loads(
         (f / "calibrated.params.json").read_text())
@@ -134,6 +140,23 @@ def test_the_joint_scale_follows_every_tolerance_within_its_bounds():
     tail = joint_scale({"mgl": entry("mgl", 3.75, 0.5)}, nominal, {})
     assert tail == pytest.approx(1.0 + SCALE_EVIDENCE_Z * 3.75 / 0.5 * 0.05 ** 2, abs=1e-4)
     assert joint_scale({"Kt": entry("Kt", 0.04, 0.00225)}, nominal, {}) == 1.0  # a sensor set Kt: no free scale
+    assert scale_interval({"Kt": entry("Kt", 0.04, 0.00225)}, nominal, {}) is None
     # Torque-carrying parameters scale, to their power and within their range; angles do not.
     assert scaled({"Kf": 1.0e4, "Cf": 0.05, "a0": 0.1, "Kw": 1.0e9}, 1.1) == pytest.approx(
         {"Kf": 1.1e4, "Cf": 0.05 / 1.1, "a0": 0.1, "Kw": 1.0e9})
+
+
+def test_the_joint_scale_interval_is_the_quantiles_of_its_prior():
+    """Kt's prior alone, a normal core to SCALE_EVIDENCE_Z = k tolerances and exponential tails beyond (the
+    Huber cost as a density): in closed form, a tail holds exp(-k z + k^2/2) / k / C beyond z > k, with
+    C = sqrt(2 pi) (2 Phi(k) - 1) + 2 exp(-k^2/2) / k, so the 95 % interval ends where that is 0.025."""
+    k, std = SCALE_EVIDENCE_Z, 0.05  # Kt's tolerance, relative
+    total = np.sqrt(2 * np.pi) * (2 * norm.cdf(k) - 1) + 2 * np.exp(-k * k / 2) / k
+    z = (k * k / 2 - np.log(0.025 * k * total)) / k
+    assert z > k  # the interval's ends lie in the tails, where the cap acts
+    lo, hi = scale_interval({}, {"Kt": 0.045}, {})
+    assert (lo, hi) == pytest.approx((1 - z * std, 1 + z * std), abs=2e-4)
+    # Evidence within its tolerance narrows it and moves it with the most probable scale.
+    mgl = {"mgl": {"nominal": 5.0, "estimate": 4.5, "tolerance": 0.5, "z": -1.0}}
+    lo2, hi2 = scale_interval(mgl, {"Kt": 0.045, "mgl": 5.0}, {})
+    assert hi2 - lo2 < hi - lo and lo2 < joint_scale(mgl, {"Kt": 0.045, "mgl": 5.0}, {}) < hi2 and lo2 > lo

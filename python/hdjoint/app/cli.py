@@ -63,8 +63,9 @@ def cmd_estimate(args) -> int:
                    allow_jitter=args.allow_jitter, current_sign=args.current_sign)
     if args.calibrate_from:
         from hdjoint.jobs.calibrate import estimate_calibrated, sidecars
-        estimated = estimate_calibrated(opts, args.calibrate_from)
+        estimated, calibrated = estimate_calibrated(opts, args.calibrate_from)
         print(f"calibrated set: {sidecars(args.output)[0]} (its calibration: {sidecars(args.output)[1]})")
+        print(calibrated.describe_scale())
     else:
         estimated = estimate_to_file(opts)
     print(estimated.jitter.describe())

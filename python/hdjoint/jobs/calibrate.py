@@ -31,7 +31,9 @@ from hdjoint.io.outputs import check_replaceable, replace_into
 from hdjoint.io.recording import Recording
 from hdjoint.jobs.diagnose import screened_recordings
 from hdjoint.jobs.inputs import UserError, check_output_file, read_params, read_recording
-from hdjoint.jobs.joint_scale import SCALE_EVIDENCE_Z, joint_scale, scaled
+from hdjoint.diagnosis.effects import HELD_WITHOUT_SENSOR as HELD
+from hdjoint.diagnosis.rules import INTERVAL
+from hdjoint.jobs.joint_scale import SCALE_EVIDENCE_Z, joint_scale, scale_interval, scaled
 
 
 @dataclass(frozen=True)
@@ -41,6 +43,7 @@ class CalibratedSet:
     verdict: str          # the diagnosis's verdict on the calibration recordings
     findings: list[dict]  # what it named: effect, kind, parameters
     scale: float          # the joint's torque scale applied to the estimates (joint_scale.py)
+    scale_interval: tuple[float, float] | None = None  # its interval at the diagnosis's coverage (None: a sensor set it)
 
     def document(self, recordings: list[str], jitter) -> dict:
         """The calibration as written beside the estimates (`<output>.calibration.json`), with the
@@ -53,11 +56,23 @@ class CalibratedSet:
                         "every tolerance within its bounds and Kt's, an estimate pulling no harder beyond "
                         f"{SCALE_EVIDENCE_Z:g} tolerances; a0 is placed on the estimated recording",
                 "joint_scale": self.scale,
+                "joint_scale_interval": list(self.scale_interval) if self.scale_interval else None,
                 "parameters": {name: {"description": table[name].description, "unit": table[name].unit, **entry}
                                for name, entry in self.calibration.items()},
                 "reading_time_jitter": {"parameter": READING_JITTER, "unit": "s", "used": jitter.std,
                                         "lo": jitter.lo, "hi": jitter.hi, "how": jitter.reason,
                                         "in_words": jitter.describe()}}
+
+
+    def describe_scale(self) -> str:
+        """The joint's torque scale in words, for the summary: the one thing the recordings could not say."""
+        if self.scale_interval is None:
+            return f"{HELD} calibrated on the torque sensor: the joint's torque scale is measured"
+        lo, hi = self.scale_interval
+        kt = self.calibration[HELD]
+        return (f"{HELD} {kt['used']:.4g} N.m/A: the joint's torque scale, {self.scale:.3f} x nominal "
+                f"({100 * INTERVAL:g} % interval {lo:.3f}-{hi:.3f}), comes from the parameters' tolerances; "
+                "recordings without a torque sensor cannot tell it")
 
 
 def _progress(message: str) -> None:
@@ -76,16 +91,21 @@ def calibrate_from(paths: list[str], params_path: str | None, time_unit: str | N
     except (parameters.ParameterError, DiagnosisError) as e:
         raise UserError(str(e)) from None
     estimates = dict(doc["params"], **{name: entry["estimate"] for name, entry in doc["calibration"].items()})
-    scale = joint_scale(doc["calibration"], nominal, statements.get("tolerance") or {})
+    tolerance = statements.get("tolerance") or {}
+    scale = joint_scale(doc["calibration"], nominal, tolerance)
+    interval = scale_interval(doc["calibration"], nominal, tolerance)
     params = scaled(estimates, scale)
     table = {name: {k: entry[k] for k in ("nominal", "estimate", "lo", "hi", "identified") if k in entry}
              for name, entry in doc["calibration"].items()}
     for name in [*table, *(n for n in params if n not in table and params[n] != estimates[n])]:
         table.setdefault(name, {"nominal": nominal.get(name, estimates[name]), "estimate": estimates[name]})
         table[name]["used"] = params[name]
+    if interval is not None:  # the held parameter is the scale: its interval is the scale's
+        held = table.setdefault(HELD, {"nominal": estimates[HELD], "estimate": estimates[HELD], "used": params[HELD]})
+        held.update(lo=estimates[HELD] * interval[0], hi=estimates[HELD] * interval[1], identified=False)
     findings = [{"effect": f["effect"], "kind": f["kind"], "parameters": f.get("parameters", {})}
                 for f in doc["findings"]]
-    return CalibratedSet(params, table, doc["verdict"], findings, scale)
+    return CalibratedSet(params, table, doc["verdict"], findings, scale, interval)
 
 
 def placed_on(rec: Recording, params: dict) -> dict:
@@ -110,7 +130,7 @@ def estimate_calibrated(opts, calibrate_paths: list[str]):
     and its calibration are written beside it. Nothing is written unless
     everything was computed. The set leaves the reading-time jitter out unless
     OPTS.params sets it: each recording's own is measured. Returns the
-    estimate's Estimated."""
+    estimate's Estimated and the CalibratedSet."""
     from hdjoint.jobs.estimate import as_written, estimate_to_file
     params_file, document_file = sidecars(opts.output)
     check_output_file(opts.output, inputs=(opts.recording, opts.params, *calibrate_paths))
@@ -128,4 +148,4 @@ def estimate_calibrated(opts, calibrate_paths: list[str]):
                                (stage / "estimates", Path(opts.output))):
             check_replaceable(target)
             replace_into(staged, target)
-    return estimated
+    return estimated, calibrated

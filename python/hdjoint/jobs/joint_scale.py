@@ -14,23 +14,37 @@ friction law the model lacks), and a normal prior would give it the
 strongest pull of all."""
 from __future__ import annotations
 
+import numpy as np
 from scipy.optimize import minimize_scalar
 from scipy.special import huber
 
 from hdjoint.diagnosis.effects import HELD_WITHOUT_SENSOR as HELD
-from hdjoint.diagnosis.rules import RESIZE_Z
+from hdjoint.diagnosis.rules import INTERVAL, RESIZE_Z
 from hdjoint.io import parameters
 
 # The power of torque in each unit of the joint's model: inertia times acceleration is a torque.
 TORQUE_POWER = {"N.m": 1, "N.m/A": 1, "N.m/rad": 1, "N.m.s/rad": 1, "kg.m2": 1, "1/(N.m)": -1}
 SCALE_RANGE = (0.5, 2.0)
 SCALE_EVIDENCE_Z = 1.5  # tolerances from its nominal value beyond which an estimate pulls the scale no harder
+SCALE_GRID = 30001  # points over SCALE_RANGE for the interval: 5e-5 apart, far below any tolerance
 
 
 def torque_power(name: str) -> int:
     """How a model parameter scales with the joint's torque (0: not at all; estimator settings never)."""
     info = parameters.table()[name]
     return TORQUE_POWER.get(info.unit, 0) if info.in_plant() else 0
+
+
+def _negative_log_prior(calibration: dict, nominal: dict, tolerance: dict[str, float]):
+    """The scale's negative log prior under CALIBRATION's entries and the held Kt's tolerance (see joint_scale)."""
+    held = nominal.get(HELD, parameters.table()[HELD].default)
+    terms = [(held, held, parameters.table()[HELD].tolerance(held, tolerance.get(HELD)), 1)]
+    terms += [(e["estimate"], e["nominal"], e["tolerance"], torque_power(name)) for name, e in calibration.items()
+              if torque_power(name) and e["nominal"] and e["tolerance"] > 0 and abs(e["z"]) <= RESIZE_Z]
+
+    def cost(s):  # z^2/2 up to SCALE_EVIDENCE_Z, then linear with its slope there
+        return sum(huber(SCALE_EVIDENCE_Z, (x * s ** power - centre) / std) for x, centre, std, power in terms)
+    return cost
 
 
 def joint_scale(calibration: dict, nominal: dict, tolerance: dict[str, float]) -> float:
@@ -40,15 +54,23 @@ def joint_scale(calibration: dict, nominal: dict, tolerance: dict[str, float]) -
     calibration fitted Kt itself (a torque sensor sets the scale)."""
     if HELD in calibration:
         return 1.0
-    held = nominal.get(HELD, parameters.table()[HELD].default)
-    terms = [(held, held, parameters.table()[HELD].tolerance(held, tolerance.get(HELD)), 1)]
-    terms += [(e["estimate"], e["nominal"], e["tolerance"], torque_power(name)) for name, e in calibration.items()
-              if torque_power(name) and e["nominal"] and e["tolerance"] > 0 and abs(e["z"]) <= RESIZE_Z]
-
-    def cost(s: float) -> float:  # z^2/2 up to SCALE_EVIDENCE_Z, then linear with its slope there
-        return sum(huber(SCALE_EVIDENCE_Z, (x * s ** power - centre) / std) for x, centre, std, power in terms)
-
+    cost = _negative_log_prior(calibration, nominal, tolerance)
     return float(minimize_scalar(cost, bounds=SCALE_RANGE, method="bounded").x)
+
+
+def scale_interval(calibration: dict, nominal: dict, tolerance: dict[str, float],
+                   coverage: float = INTERVAL) -> tuple[float, float] | None:
+    """The torque scale's central COVERAGE interval under the same priors: the
+    quantiles of exp(-cost) over SCALE_RANGE, summed on a fine grid (one
+    dimension: exact up to the grid). None where a sensor fitted Kt."""
+    if HELD in calibration:
+        return None
+    s = np.linspace(*SCALE_RANGE, SCALE_GRID)
+    cost = _negative_log_prior(calibration, nominal, tolerance)(s)
+    density = np.exp(-(cost - cost.min()))
+    cumulative = np.cumsum(density) / density.sum()
+    tail = (1.0 - coverage) / 2.0
+    return float(np.interp(tail, cumulative, s)), float(np.interp(1.0 - tail, cumulative, s))
 
 
 def scaled(params: dict, scale: float) -> dict:
