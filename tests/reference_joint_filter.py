@@ -30,12 +30,23 @@ MIN_CURRENT_GAIN_STD, CURRENT_DRIFT_TIME = 1e-9, 600.0
 N_STATES = 9
 
 
+def kinematic_error_rate(p, theta_m, theta_l, omega_m, omega_l):
+    """d/dt of eq. (7)'s kinematic error along the motion (its terms differentiated by hand)."""
+    wl, ww = p["omega_l"], p["omega_w"]
+    by_link = wl * (-p["al1"] * np.sin(wl * theta_l) + p["bl1"] * np.cos(wl * theta_l))
+    by_motor = ww * (-p["aw1"] * np.sin(ww * theta_m) + p["bw1"] * np.cos(ww * theta_m)
+                     - 2 * p["aw2"] * np.sin(2 * ww * theta_m) + 2 * p["bw2"] * np.cos(2 * ww * theta_m))
+    return by_link * omega_l + by_motor * omega_m
+
+
 def joint_torque(p, x, i_m):
-    """Transmitted torque of a state, the compliance model plus its error e (works for complex x: complex-step)."""
-    theta_l, delta = x[0], x[2]
+    """Transmitted torque of a state, the compliance model plus its error e and the structural damping of
+    the elastic torsion rate, nu less the kinematic error's rate (works for complex x: complex-step)."""
+    theta_l, omega_l, delta, nu = x[0], x[1], x[2], x[3]
     theta_m = p["N"] * (theta_l + delta)
     dtheta_f = delta - wave_generator_torsion(p, p["Kt"] * i_m) - kinematic_error(p, theta_m, theta_l)
-    return torque_from_torsion(p, dtheta_f) + x[7]
+    damping = p.get("Df", 0.0) * (nu - kinematic_error_rate(p, theta_m, theta_l, p["N"] * (omega_l + nu), omega_l))
+    return torque_from_torsion(p, dtheta_f) + damping + x[7]
 
 
 def dynamics(p, x, i_m):

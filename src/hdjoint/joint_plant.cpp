@@ -91,11 +91,9 @@ bool JointPlant::torque(const PlantState& x, const Vector<3>& z, double* tau, bo
     const double elastic = total_torsion(x(kThetaM), x(kThetaL), p_) - kinematic_error(x(kThetaM), x(kThetaL), p_);
     double tau_f = 0.0;
     if (!elastic_torque(elastic, &tau_f, saturate)) return false;
-    double dk_dm = 0.0, dk_dl = 0.0;
-    if (p_.Df != 0.0) kinematic_error_gradient(x(kThetaM), x(kThetaL), p_, &dk_dm, &dk_dl);
-    // Damping of the deformation only: the kinematic error's share of the
-    // torsion rate is geometry (gear meshing), not strain.
-    *tau = tau_f + p_.Df * (x(kOmegaM) / p_.N - x(kOmegaL) - dk_dm * x(kOmegaM) - dk_dl * x(kOmegaL));
+    // Damping of the deformation only (elastic_torsion_rate).
+    if (p_.Df != 0.0) *tau = tau_f + p_.Df * elastic_torsion_rate(x(kThetaM), x(kOmegaM), x(kThetaL), x(kOmegaL), p_);
+    else *tau = tau_f;
     if (p_.hys_H > 0.0) *tau += z(0);
     if (p_.bw_A > 0.0) *tau += z(1);
     return std::isfinite(*tau);
@@ -145,12 +143,9 @@ bool JointPlant::model(const Vector<S>& x, double t, const PlantInputs& in, Vect
 
     // The rate of the elastic torsion (without the kinematic error's, which is
     // geometry): it drives the hysteresis states and the damping Df.
-    double dk_dm = 0.0, dk_dl = 0.0, rate = 0.0;
+    double rate = 0.0;
     double friction = 0.0, level = 0.0, speed = 0.0, dz_lugre = 0.0;
-    if (dahl || bouc_wen || p_.Df != 0.0) {
-        kinematic_error_gradient(theta_m, theta_l, p_, &dk_dm, &dk_dl);
-        rate = omega_m / p_.N - omega_l - dk_dm * omega_m - dk_dl * omega_l;
-    }
+    if (dahl || bouc_wen || p_.Df != 0.0) rate = elastic_torsion_rate(theta_m, omega_m, theta_l, omega_l, p_);
     double tau = tau_f + p_.Df * rate;
     if constexpr (kFull) {
         if (dahl) tau += x(4);
@@ -184,13 +179,12 @@ bool JointPlant::model(const Vector<S>& x, double t, const PlantInputs& in, Vect
     // d tau_f / d elastic torsion = 1 / (total compliance of the chain).
     const double compliance = flexspline_compliance(tau_f, p_) + wave_generator_compliance(tau_f / p_.N, p_) / p_.N;
     const double stiffness = in_backlash(elastic, p_) ? 0.0 : 1.0 / compliance;  // slack: no stiffness
-    kinematic_error_gradient(theta_m, theta_l, p_, &dk_dm, &dk_dl);
-    // Gradient of the elastic torsion rate by [theta_m, omega_m, theta_l, omega_l].
-    double dd_m = 0.0, dd_l = 0.0;
-    kinematic_error_curvature(theta_m, theta_l, p_, &dd_m, &dd_l);
-    const double drate[4] = {-dd_m * omega_m, 1.0 / p_.N - dk_dm, -dd_l * omega_l, -1.0 - dk_dl};
-    const double dtau_dtheta_m = stiffness * (1.0 / p_.N - dk_dm) + p_.Df * drate[0];
-    const double dtau_dtheta_l = stiffness * (-1.0 - dk_dl) + p_.Df * drate[2];
+    // Gradient of the elastic torsion rate by [theta_m, omega_m, theta_l, omega_l]; d elastic / d theta_m is
+    // drate[1] and d elastic / d theta_l is drate[3] (the rate is the elastic torsion's time derivative).
+    double drate[4];
+    elastic_torsion_rate_gradient(theta_m, omega_m, theta_l, omega_l, p_, drate);
+    const double dtau_dtheta_m = stiffness * drate[1] + p_.Df * drate[0];
+    const double dtau_dtheta_l = stiffness * drate[3] + p_.Df * drate[2];
     const double dtau_domega_m = p_.Df * drate[1];
     const double dtau_domega_l = p_.Df * drate[3];
     const double dfriction = lugre ? 0.0 : coulomb_friction_slope(omega_m, p_, scale) + p_.Bm;

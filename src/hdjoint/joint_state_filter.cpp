@@ -45,6 +45,16 @@ JointTorque joint_state_torque(const JointState& x, const JointInput& in, const 
     t.tau = c.tau + in.z + x(joint_state::kTorqueError);
     t.d_delta = k * (1.0 - p.N * e_m);
     t.d_theta_l = k * (-p.N * e_m - e_l);
+    if (p.Df != 0.0) {  // the structural damping of the elastic torsion rate, as the joint has it
+        const double omega_l = x(joint_state::kOmegaL), omega_m = p.N * (omega_l + x(joint_state::kNu));
+        double d[4];  // by theta_m, omega_m, theta_l, omega_l
+        elastic_torsion_rate_gradient(theta_m, omega_m, theta_l, omega_l, p, d);
+        t.tau += p.Df * elastic_torsion_rate(theta_m, omega_m, theta_l, omega_l, p);
+        t.d_delta += p.Df * p.N * d[0];
+        t.d_theta_l += p.Df * (p.N * d[0] + d[2]);
+        t.d_nu = p.Df * p.N * d[1];
+        t.d_omega_l = p.Df * (p.N * d[1] + d[3]);
+    }
     t.valid = std::isfinite(t.tau);
     return t;
 }
@@ -90,8 +100,9 @@ bool JointSystemModel::derivative(const State& x, const Control& u, State* dx, J
     J->setZero();
     (*J)(kThetaL, kOmegaL) = 1.0;
     (*J)(kOmegaL, kThetaL) = (T.d_theta_l - q.mgl * std::cos(theta_l)) / inertia;
-    (*J)(kOmegaL, kOmegaL) = -q.Bl / inertia;
+    (*J)(kOmegaL, kOmegaL) = (T.d_omega_l - q.Bl) / inertia;
     (*J)(kOmegaL, kDelta) = T.d_delta / inertia;
+    (*J)(kOmegaL, kNu) = T.d_nu / inertia;
     (*J)(kOmegaL, kLoad) = -1.0 / inertia;
     (*J)(kOmegaL, kInertiaError) = -a_l * q.Jl / inertia;
     (*J)(kOmegaL, kTorqueError) = 1.0 / inertia;
@@ -100,9 +111,9 @@ bool JointSystemModel::derivative(const State& x, const Control& u, State* dx, J
     const double am_speed = -friction * q.N / NJm;  // by omega_l and by nu
     const double am_delta = (cog * q.N - T.d_delta / q.N) / NJm;
     (*J)(kNu, kThetaL) = am_theta_l - (*J)(kOmegaL, kThetaL);
-    (*J)(kNu, kOmegaL) = am_speed - (*J)(kOmegaL, kOmegaL);
+    (*J)(kNu, kOmegaL) = am_speed - T.d_omega_l / (q.N * NJm) - (*J)(kOmegaL, kOmegaL);
     (*J)(kNu, kDelta) = am_delta - (*J)(kOmegaL, kDelta);
-    (*J)(kNu, kNu) = am_speed;
+    (*J)(kNu, kNu) = am_speed - T.d_nu / (q.N * NJm) - (*J)(kOmegaL, kNu);
     (*J)(kNu, kLoad) = -(*J)(kOmegaL, kLoad);
     (*J)(kNu, kInertiaError) = -(*J)(kOmegaL, kInertiaError);
     (*J)(kNu, kTorqueError) = -1.0 / (q.N * NJm) - (*J)(kOmegaL, kTorqueError);
@@ -252,10 +263,13 @@ void JointStateFilter::average_friction_over_speed() {
 
 double JointStateFilter::torque_variance(const JointTorque& T, const JointCovariance& P) {
     using namespace joint_state;
-    // The gradient by e is 1.
-    return T.d_theta_l * T.d_theta_l * P(kThetaL, kThetaL) + 2.0 * T.d_theta_l * T.d_delta * P(kThetaL, kDelta) +
-           T.d_delta * T.d_delta * P(kDelta, kDelta) + P(kTorqueError, kTorqueError) +
-           2.0 * (T.d_theta_l * P(kThetaL, kTorqueError) + T.d_delta * P(kDelta, kTorqueError));
+    // g^T P g over the states the torque depends on (its gradient by e is 1).
+    const int at[5] = {kThetaL, kOmegaL, kDelta, kNu, kTorqueError};
+    const double g[5] = {T.d_theta_l, T.d_omega_l, T.d_delta, T.d_nu, 1.0};
+    double variance = 0.0;
+    for (int i = 0; i < 5; ++i)
+        for (int j = 0; j < 5; ++j) variance += g[i] * P(at[i], at[j]) * g[j];
+    return variance;
 }
 
 double JointStateFilter::unseen_variance(const Parameters& p) {

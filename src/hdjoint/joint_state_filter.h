@@ -39,7 +39,11 @@
 //   d(w)/dt = r, d(r)/dt = noise, d(g)/dt = 0, d(e)/dt = noise, s drifts slowly
 // Dynamics, with tau(x) the transmitted torque of the corrected compliance
 // chain (eq. 3-8 with kinematic error, wave generator, backlash, the
-// Dahl hysteresis torque z of the filter's own torsion, follow_hysteresis):
+// Dahl hysteresis torque z of the filter's own torsion, follow_hysteresis)
+// plus the structural damping Df times the elastic torsion rate (as the joint
+// has it: without it the filter's torsional mode is undamped where the
+// joint's is not, and the smoother, trusting that mode from both sides,
+// lost to tau_hat on the independent truth):
 //   Jl*(1 + g)*d(omega_l)/dt = tau - Bl*omega_l - mgl*sin(theta_l) - w
 //   N*Jm*d(omega_l + nu)/dt  = Kt*(1 + s)*i_m + cogging - tau_fm(omega_m) - Bm*omega_m - tau/N
 // discretised by the linearly implicit trapezoidal rule (A-stable, keeps the
@@ -101,6 +105,8 @@ struct JointTorque {
     double tau = 0.0;
     double d_theta_l = 0.0;  // d tau / d theta_l
     double d_delta = 0.0;    // d tau / d delta
+    double d_omega_l = 0.0;  // d tau / d omega_l (the structural damping Df)
+    double d_nu = 0.0;       // d tau / d nu
     bool valid = false;
 };
 JointTorque joint_state_torque(const JointState& x, const JointInput& in, const Parameters& p);

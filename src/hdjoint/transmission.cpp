@@ -85,6 +85,23 @@ void kinematic_error_curvature(double theta_m, double theta_l, const Parameters&
     *dd_theta_l += link_harmonics(p)(theta_l, 2);
 }
 
+double elastic_torsion_rate(double theta_m, double omega_m, double theta_l, double omega_l, const Parameters& p) {
+    double dk_dm = 0.0, dk_dl = 0.0;
+    kinematic_error_gradient(theta_m, theta_l, p, &dk_dm, &dk_dl);
+    return omega_m / p.N - omega_l - dk_dm * omega_m - dk_dl * omega_l;
+}
+
+void elastic_torsion_rate_gradient(double theta_m, double omega_m, double theta_l, double omega_l,
+                                   const Parameters& p, double d[4]) {
+    double dk_dm = 0.0, dk_dl = 0.0, dd_m = 0.0, dd_l = 0.0;
+    kinematic_error_gradient(theta_m, theta_l, p, &dk_dm, &dk_dl);
+    kinematic_error_curvature(theta_m, theta_l, p, &dd_m, &dd_l);
+    d[0] = -dd_m * omega_m;
+    d[1] = 1.0 / p.N - dk_dm;
+    d[2] = -dd_l * omega_l;
+    d[3] = -1.0 - dk_dl;
+}
+
 double wave_generator_torsion(double tau_w, const Parameters& p) {
     if (p.Cw < kLinearLimit) return tau_w / (p.N * p.Kw);
     return sign(tau_w) / (p.Cw * p.N * p.Kw) * (-std::expm1(-p.Cw * std::fabs(tau_w)));

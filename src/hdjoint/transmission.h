@@ -24,6 +24,13 @@ void kinematic_error_gradient(double theta_m, double theta_l, const Parameters& 
 void kinematic_error_curvature(double theta_m, double theta_l, const Parameters& p, double* dd_theta_m,
                                double* dd_theta_l);  // second derivatives
 
+// The elastic torsion's rate: the total torsion's less the kinematic error's
+// (gear geometry, not strain). It drives the structural damping Df and the
+// hysteresis. Its gradient by [theta_m, omega_m, theta_l, omega_l] in d.
+double elastic_torsion_rate(double theta_m, double omega_m, double theta_l, double omega_l, const Parameters& p);
+void elastic_torsion_rate_gradient(double theta_m, double omega_m, double theta_l, double omega_l,
+                                   const Parameters& p, double d[4]);
+
 // eq. (4): torsion of the wave generator seen at the output, for a motor-side torque tau_w.
 double wave_generator_torsion(double tau_w, const Parameters& p);
 double wave_generator_compliance(double tau_w, const Parameters& p);  // d wg / d tau_w
