@@ -22,17 +22,17 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from hdjoint.diagnosis.channels import Evaluator, channels_for
+from hdjoint.diagnosis.effects import HELD_WITHOUT_SENSOR as HELD
 from hdjoint.diagnosis.kinematics import kinematics
 from hdjoint.diagnosis.part_torques import Prepared
 from hdjoint.diagnosis.pipeline import diagnose
 from hdjoint.diagnosis.prepare import DiagnosisError, check_recording, place_offset
+from hdjoint.diagnosis.rules import INTERVAL
 from hdjoint.io import parameters
 from hdjoint.io.outputs import check_replaceable, replace_into
 from hdjoint.io.recording import Recording
 from hdjoint.jobs.diagnose import screened_recordings
 from hdjoint.jobs.inputs import UserError, check_output_file, read_params, read_recording
-from hdjoint.diagnosis.effects import HELD_WITHOUT_SENSOR as HELD
-from hdjoint.diagnosis.rules import INTERVAL
 from hdjoint.jobs.joint_scale import SCALE_EVIDENCE_Z, joint_scale, scale_interval, scaled
 
 
@@ -62,7 +62,6 @@ class CalibratedSet:
                 "reading_time_jitter": {"parameter": READING_JITTER, "unit": "s", "used": jitter.std,
                                         "lo": jitter.lo, "hi": jitter.hi, "how": jitter.reason,
                                         "in_words": jitter.describe()}}
-
 
     def describe_scale(self) -> str:
         """The joint's torque scale in words, for the summary: the one thing the recordings could not say."""

@@ -11,7 +11,8 @@ each prior pulls as a normal one up to SCALE_EVIDENCE_Z tolerances and no
 harder beyond (a Huber loss): an estimate deep in its tolerance's tail
 carries model-form error more likely than the scale (Jm taking up a
 friction law the model lacks), and a normal prior would give it the
-strongest pull of all."""
+strongest pull of all. The same cost, as a density, gives the scale its
+interval, which Kt, the parameter the scale sets, carries."""
 from __future__ import annotations
 
 import numpy as np
