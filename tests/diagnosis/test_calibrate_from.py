@@ -15,7 +15,8 @@ import pytest
 from cli_helpers import run_cli
 from hdjoint.io import parameters
 from hdjoint.io.recording import write_recording
-from hdjoint.jobs.joint_scale import SCALE_EVIDENCE_Z, joint_scale, scale_interval, scaled, torque_power
+from hdjoint.jobs.joint_scale import (SCALE_EVIDENCE_Z, joint_scale, scale_interval, scaled, scaled_interval,
+                                     torque_power)
 from scipy.stats import norm
 from hdjoint_truth.cases import CONTROL_CASES, draw, record
 
@@ -65,6 +66,9 @@ def test_a_sensorless_calibration_is_used_at_its_estimates(joint_files, capsys):
     assert lo < scale < hi and rows["Kt"]["lo"] == pytest.approx(nominal["Kt"] * lo)
     assert rows["Kt"]["hi"] == pytest.approx(nominal["Kt"] * hi) and rows["Kt"]["identified"] is False
     assert f"interval {lo:.3f}-{hi:.3f}" in out and "cannot tell it" in out
+    # Every other scaled value used has an interval that takes in the scale's.
+    scaled_rows = {n: r for n, r in rows.items() if n != "Kt" and torque_power(n) and "lo" in r}
+    assert scaled_rows and all(r["used_lo"] < r["used"] < r["used_hi"] for r in scaled_rows.values())
     # The nominal file states jsf_r_time (a full set): the calibrated set keeps it, and the document says so.
     assert used["jsf_r_time"] == nominal["jsf_r_time"] and "jsf_r_time" in json.loads(
         (f / "calibrated.params.json").read_text())
@@ -160,3 +164,13 @@ def test_the_joint_scale_interval_is_the_quantiles_of_its_prior():
     mgl = {"mgl": {"nominal": 5.0, "estimate": 4.5, "tolerance": 0.5, "z": -1.0}}
     lo2, hi2 = scale_interval(mgl, {"Kt": 0.045, "mgl": 5.0}, {})
     assert hi2 - lo2 < hi - lo and lo2 < joint_scale(mgl, {"Kt": 0.045, "mgl": 5.0}, {}) < hi2 and lo2 > lo
+
+
+def test_a_scaled_value_takes_in_both_intervals():
+    """used = estimate * scale**power; its interval combines the estimate's (the scale held at 1) and the
+    scale's in quadrature on each side: either alone when the other is exact, both when neither is."""
+    assert scaled_interval(100.0, 90.0, 120.0, 1, 1.1, (1.1, 1.1)) == pytest.approx((99.0, 132.0))
+    assert scaled_interval(100.0, 100.0, 100.0, 1, 1.1, (1.0, 1.3)) == pytest.approx((100.0, 130.0))
+    assert scaled_interval(100.0, 100.0, 100.0, -1, 1.0, (0.8, 1.25)) == pytest.approx((80.0, 125.0))
+    lo, hi = scaled_interval(100.0, 90.0, 120.0, 1, 1.0, (0.9, 1.2))
+    assert (lo, hi) == pytest.approx((100.0 - np.hypot(10.0, 10.0), 100.0 + np.hypot(20.0, 20.0)))

@@ -33,13 +33,15 @@ from hdjoint.io.outputs import check_replaceable, replace_into
 from hdjoint.io.recording import Recording
 from hdjoint.jobs.diagnose import screened_recordings
 from hdjoint.jobs.inputs import UserError, check_output_file, read_params, read_recording
-from hdjoint.jobs.joint_scale import SCALE_EVIDENCE_Z, joint_scale, scale_interval, scaled
+from hdjoint.jobs.joint_scale import (SCALE_EVIDENCE_Z, joint_scale, scale_interval, scaled, scaled_interval,
+                                     torque_power)
 
 
 @dataclass(frozen=True)
 class CalibratedSet:
     params: dict          # the set the estimator runs with
     calibration: dict     # per parameter calibrated or scaled: nominal, estimate, interval, identified, the value used
+                          # and, scaled, its interval (used_lo, used_hi: the estimate's and the scale's together)
     verdict: str          # the diagnosis's verdict on the calibration recordings
     findings: list[dict]  # what it named: effect, kind, parameters
     scale: float          # the joint's torque scale applied to the estimates (joint_scale.py)
@@ -54,7 +56,8 @@ class CalibratedSet:
                 "rule": "every parameter at its estimate (maximum a posteriori, the tolerance its prior), "
                         "the torque-carrying ones times the joint's torque scale, the most probable under "
                         "every tolerance within its bounds and Kt's, an estimate pulling no harder beyond "
-                        f"{SCALE_EVIDENCE_Z:g} tolerances; a0 is placed on the estimated recording",
+                        f"{SCALE_EVIDENCE_Z:g} tolerances; a0 is placed on the estimated recording; used_lo, used_hi: "
+                        "a scaled value's interval, the estimate's and the scale's combined",
                 "joint_scale": self.scale,
                 "joint_scale_interval": list(self.scale_interval) if self.scale_interval else None,
                 "parameters": {name: {"description": table[name].description, "unit": table[name].unit, **entry}
@@ -102,6 +105,10 @@ def calibrate_from(paths: list[str], params_path: str | None, time_unit: str | N
     if interval is not None:  # the held parameter is the scale: its interval is the scale's
         held = table.setdefault(HELD, {"nominal": estimates[HELD], "estimate": estimates[HELD], "used": params[HELD]})
         held.update(lo=estimates[HELD] * interval[0], hi=estimates[HELD] * interval[1], identified=False)
+        for name, entry in table.items():  # a scaled value's interval takes in the scale's
+            if name != HELD and torque_power(name) and entry.get("lo") is not None:
+                entry["used_lo"], entry["used_hi"] = scaled_interval(
+                    entry["estimate"], entry["lo"], entry["hi"], torque_power(name), scale, interval)
     findings = [{"effect": f["effect"], "kind": f["kind"], "parameters": f.get("parameters", {})}
                 for f in doc["findings"]]
     return CalibratedSet(params, table, doc["verdict"], findings, scale, interval)

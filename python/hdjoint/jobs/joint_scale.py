@@ -15,6 +15,8 @@ strongest pull of all. The same cost, as a density, gives the scale its
 interval, which Kt, the parameter the scale sets, carries."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy.optimize import minimize_scalar
 from scipy.special import huber
@@ -72,6 +74,19 @@ def scale_interval(calibration: dict, nominal: dict, tolerance: dict[str, float]
     cumulative = np.cumsum(density) / density.sum()
     tail = (1.0 - coverage) / 2.0
     return float(np.interp(tail, cumulative, s)), float(np.interp(1.0 - tail, cumulative, s))
+
+
+def scaled_interval(estimate: float, lo: float, hi: float, power: int, scale: float,
+                    interval: tuple[float, float]) -> tuple[float, float]:
+    """The interval of a value used, ESTIMATE * SCALE**POWER: the estimate's interval (LO, HI), found with the
+    scale held at 1, and the scale's INTERVAL, combined in quadrature on each side. The two are independent:
+    the recordings do not inform the scale, only the tolerances do."""
+    factor = scale ** power
+    ends = sorted(end ** power for end in interval)  # the scale's ends as factors, the lower first
+    lower, upper = (ends[0], ends[1]) if estimate >= 0 else (ends[1], ends[0])
+    used = estimate * factor
+    return (used - math.hypot((estimate - lo) * factor, estimate * (factor - lower)),
+            used + math.hypot((hi - estimate) * factor, estimate * (upper - factor)))
 
 
 def scaled(params: dict, scale: float) -> dict:
