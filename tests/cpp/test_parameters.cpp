@@ -185,10 +185,10 @@ TEST(Parameters, EncoderCountsTooFewToQuantiseAreRefused) {
 
 TEST(Parameters, ValidateChecksOnlyTheParametersTheFmuCarries) {
     Parameters p;
-    p.Df = -1.0;  // plant only
+    p.Fl = -1.0;  // plant only
     EXPECT_FALSE(validate(p, true, false).has_value());
     ASSERT_TRUE(validate(p, false, true).has_value());
-    EXPECT_NE(validate(p, false, true)->find("Df"), std::string::npos);
+    EXPECT_NE(validate(p, false, true)->find("Fl"), std::string::npos);
 
     Parameters q;
     q.ukf_alpha = 0.0;  // estimator only
