@@ -105,8 +105,8 @@ def joint_for(case: Case, seed: int, duration: float):
 
 def exact_set(joint) -> dict:
     """The truth's value of every parameter the model has; the wave generator loaded by
-    tau_f/N, as the truth's is; Bouc-Wen hysteresis as the estimator's Dahl law. An effect
-    in a form the model lacks stays out. The estimator's settings are the calibrated set's, so
+    tau_f/N, as the truth's is; Bouc-Wen hysteresis as the estimator's Dahl law; extra kinematic
+    orders in the ke_m*/ke_l* slots. An effect in a form the model lacks stays out. The estimator's settings are the calibrated set's, so
     the two compare like for like."""
     exact = dict(joint.nominal)
     exact.update({k: float(v) for k, v in joint.truth.items() if k in parameters.table()})
@@ -115,6 +115,11 @@ def exact_set(joint) -> dict:
         exact["omega_fc"] = joint.form.omega_fc
     if exact.get("bw_A", 0.0) > 0.0 and not exact["hys_H"]:
         exact.update(dahl_matching_bouc_wen(exact["bw_A"], exact["bw_beta"], exact["bw_gamma"]))
+    # The truth's extra kinematic orders are harmonics of the model's own form: its ke_m*/ke_l* slots.
+    slots = {"m": iter(("ke_m1", "ke_m2")), "l": iter(("ke_l1", "ke_l2"))}
+    for angle, order, a, b in joint.form.extra_kinematic:
+        slot = next(slots[angle])
+        exact.update({f"{slot}_order": order, f"{slot}_a": a, f"{slot}_b": b})
     return exact
 
 
