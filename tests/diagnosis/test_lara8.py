@@ -204,11 +204,13 @@ def test_a_loop_whose_gain_the_refitted_stiffness_keeps_is_not_hysteresis():
     assert hysteresis["held_out_gain"] > 0.3  # the borrowed gain is large: the rule, not the size, rejects it
 
 
+@pytest.mark.filterwarnings("error::RuntimeWarning")
 def test_a_recording_where_the_motor_stands_still_gets_its_report(tmp_path):
     """The first half of joint 3's jog turns the motor 0.015 revolutions: the
     motor channels compare nothing, and the report's regime figure took the
     percentiles of no samples and failed (lara8_table.py stopped there).
-    The diagnosis must finish with its report and say what it cannot test."""
+    The diagnosis must finish with its report and say what it cannot test,
+    without dividing by a residual that does not vary (its correlation length)."""
     from hdjoint.io import parameters
     from hdjoint.jobs.diagnose import diagnose_to_directory
     from hdjoint.io.recording import write_recording

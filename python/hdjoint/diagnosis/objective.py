@@ -123,6 +123,8 @@ class Objective:
             return 1
         spectrum = np.fft.rfft(r, 2 * len(r))
         acf = np.fft.irfft(spectrum * np.conj(spectrum))[: min(len(r), 2000)]
+        if not acf[0] > 0.0:  # a residual without variation (a channel that compares nothing): no correlation
+            return 1
         acf /= acf[0]
         below = np.flatnonzero(acf < math.exp(-1))
         length = int(below[0]) if len(below) else 2000
