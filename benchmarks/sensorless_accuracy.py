@@ -106,8 +106,8 @@ def joint_for(case: Case, seed: int, duration: float):
 def exact_set(joint) -> dict:
     """The truth's value of every parameter the model has; the wave generator loaded by
     tau_f/N, as the truth's is; Bouc-Wen hysteresis as the estimator's Dahl law; extra kinematic
-    orders in the ke_m*/ke_l* slots. An effect in a form the model lacks stays out. The estimator's settings are the calibrated set's, so
-    the two compare like for like."""
+    orders in the ke_m*/ke_l* slots. An effect in a form the model lacks stays out. The
+    estimator's settings are the calibrated set's, so the two compare like for like."""
     exact = dict(joint.nominal)
     exact.update({k: float(v) for k, v in joint.truth.items() if k in parameters.table()})
     exact["wg_load"] = 1.0

@@ -49,7 +49,7 @@ JointTorque joint_state_torque(const JointState& x, const JointInput& in, const 
         const double omega_l = x(joint_state::kOmegaL), omega_m = p.N * (omega_l + x(joint_state::kNu));
         double d[4];  // by theta_m, omega_m, theta_l, omega_l
         elastic_torsion_rate_gradient(theta_m, omega_m, theta_l, omega_l, p, d);
-        t.tau += p.Df * elastic_torsion_rate(theta_m, omega_m, theta_l, omega_l, p);
+        t.tau += p.Df * (d[1] * omega_m + d[3] * omega_l);  // the rate is linear in the speeds
         t.d_delta += p.Df * p.N * d[0];
         t.d_theta_l += p.Df * (p.N * d[0] + d[2]);
         t.d_nu = p.Df * p.N * d[1];
@@ -263,12 +263,15 @@ void JointStateFilter::average_friction_over_speed() {
 
 double JointStateFilter::torque_variance(const JointTorque& T, const JointCovariance& P) {
     using namespace joint_state;
-    // g^T P g over the states the torque depends on (its gradient by e is 1).
+    // g^T P g over the states the torque depends on (its gradient by e is 1), P symmetric.
     const int at[5] = {kThetaL, kOmegaL, kDelta, kNu, kTorqueError};
     const double g[5] = {T.d_theta_l, T.d_omega_l, T.d_delta, T.d_nu, 1.0};
     double variance = 0.0;
-    for (int i = 0; i < 5; ++i)
-        for (int j = 0; j < 5; ++j) variance += g[i] * P(at[i], at[j]) * g[j];
+    for (int i = 0; i < 5; ++i) {
+        double row = 0.5 * g[i] * P(at[i], at[i]);
+        for (int j = i + 1; j < 5; ++j) row += g[j] * P(at[i], at[j]);
+        variance += 2.0 * g[i] * row;
+    }
     return variance;
 }
 
