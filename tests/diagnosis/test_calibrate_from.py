@@ -16,7 +16,7 @@ from cli_helpers import run_cli
 from hdjoint.io import parameters
 from hdjoint.io.recording import write_recording
 from hdjoint.jobs.joint_scale import (SCALE_EVIDENCE_Z, joint_scale, scale_interval, scaled, scaled_interval,
-                                     torque_power)
+                                     torque_power, used_interval)
 from scipy.stats import norm
 from hdjoint_truth.cases import CONTROL_CASES, draw, record
 
@@ -164,6 +164,18 @@ def test_the_joint_scale_interval_is_the_quantiles_of_its_prior():
     mgl = {"mgl": {"nominal": 5.0, "estimate": 4.5, "tolerance": 0.5, "z": -1.0}}
     lo2, hi2 = scale_interval(mgl, {"Kt": 0.045, "mgl": 5.0}, {})
     assert hi2 - lo2 < hi - lo and lo2 < joint_scale(mgl, {"Kt": 0.045, "mgl": 5.0}, {}) < hi2 and lo2 > lo
+
+
+def test_a_scaled_value_s_interval_stays_within_its_range():
+    """The value used is clipped to its parameter's range (scaled: Kw at its top stands for no compliance);
+    its interval is too: a limit the range sets is no uncertainty. Within the range, it is scaled_interval."""
+    top = parameters.table()["Kw"].max
+    lo, hi = used_interval("Kw", 0.9 * top, 0.5 * top, 2.0 * top, 1.05, (0.95, 1.15))
+    assert hi == top and lo == pytest.approx(scaled_interval(0.9 * top, 0.5 * top, 2.0 * top, 1, 1.05,
+                                                             (0.95, 1.15))[0])
+    assert scaled({"Kw": 0.9 * top}, 1.2)["Kw"] == hi  # the value used, clipped alike
+    assert used_interval("Kt", 0.045, 0.044, 0.046, 1.0, (0.98, 1.02)) == pytest.approx(
+        scaled_interval(0.045, 0.044, 0.046, 1, 1.0, (0.98, 1.02)))
 
 
 def test_a_scaled_value_takes_in_both_intervals():

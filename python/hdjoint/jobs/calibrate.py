@@ -33,7 +33,7 @@ from hdjoint.io.outputs import check_replaceable, replace_into
 from hdjoint.io.recording import Recording
 from hdjoint.jobs.diagnose import screened_recordings
 from hdjoint.jobs.inputs import UserError, check_output_file, read_params, read_recording
-from hdjoint.jobs.joint_scale import (SCALE_EVIDENCE_Z, joint_scale, scale_interval, scaled, scaled_interval,
+from hdjoint.jobs.joint_scale import (SCALE_EVIDENCE_Z, joint_scale, scale_interval, scaled, used_interval,
                                      torque_power)
 
 
@@ -107,8 +107,8 @@ def calibrate_from(paths: list[str], params_path: str | None, time_unit: str | N
         held.update(lo=estimates[HELD] * interval[0], hi=estimates[HELD] * interval[1], identified=False)
         for name, entry in table.items():  # a scaled value's interval takes in the scale's
             if name != HELD and torque_power(name) and entry.get("lo") is not None:
-                entry["used_lo"], entry["used_hi"] = scaled_interval(
-                    entry["estimate"], entry["lo"], entry["hi"], torque_power(name), scale, interval)
+                entry["used_lo"], entry["used_hi"] = used_interval(
+                    name, entry["estimate"], entry["lo"], entry["hi"], scale, interval)
     findings = [{"effect": f["effect"], "kind": f["kind"], "parameters": f.get("parameters", {})}
                 for f in doc["findings"]]
     return CalibratedSet(params, table, doc["verdict"], findings, scale, interval)

@@ -89,6 +89,15 @@ def scaled_interval(estimate: float, lo: float, hi: float, power: int, scale: fl
             used + math.hypot((hi - estimate) * factor, estimate * (upper - factor)))
 
 
+def used_interval(name: str, estimate: float, lo: float, hi: float, scale: float,
+                  interval: tuple[float, float]) -> tuple[float, float]:
+    """The interval of parameter NAME as used (scaled_interval at its torque power), within its range, as
+    the value used is (scaled): a limit the range sets is no uncertainty."""
+    low, high = scaled_interval(estimate, lo, hi, torque_power(name), scale, interval)
+    bounds = parameters.table()[name]
+    return max(low, bounds.min), min(high, bounds.max)
+
+
 def scaled(params: dict, scale: float) -> dict:
     """PARAMS with every torque-carrying parameter scaled by SCALE (to its power),
     within its range: one at a bound stands for a limit (Kw at its top: no compliance)."""
