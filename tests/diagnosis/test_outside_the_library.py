@@ -10,9 +10,11 @@ channel through its smoothing filter; a ripple that grows with the torque
 averages out of a scan over the angle when the torque changes sign.
 findings.remaining_structure scans both."""
 from dataclasses import replace
+from types import SimpleNamespace
 
 import pytest
 
+from hdjoint.diagnosis.effects.thermal_drift import EFFECT as THERMAL_DRIFT
 from hdjoint.diagnosis.pipeline import diagnose
 from hdjoint_truth.cases import OPEN_LIBRARY_CASES, draw, record
 
@@ -58,12 +60,18 @@ def test_a_lugre_friction_control_is_consistent():
 
 def test_a_catch_all_whose_joint_refit_is_not_physical_is_refused():
     """Friction growing with the load, without the torque sensor: thermal drift
-    passed on its own fit, but settling with the calibration turned it into a
-    step of Kt with a 0.1 s time constant. Each accepted effect is judged
-    again on the joint refit (select._accept), so this is no finding."""
+    passes on its own fit, and settling with the calibration turned it into a
+    step of Kt (a 0.1 s time constant) on the machine the test was written on,
+    and into a warm-up a motor can have (Kt -2 % over 4.4 s) on another with the
+    same code: the optimiser's path differs. Each accepted effect is judged again
+    on the joint refit (select._accept): what is kept is physical, what is not is
+    refused and says why."""
     joint = draw(next(c for c in OPEN_LIBRARY_CASES if c.outside == "friction_load"), 0, 30.0)
     _, doc = diagnose(replace(record(joint, 0), tau_sensor=None), joint.nominal, workers=1)
-    assert "thermal_drift" not in [f["effect"] for f in doc["findings"]], doc["findings"]
-    drift = [h for r in doc["hypotheses_tested"] for h in r if h["effect"] == "thermal_drift"]
-    assert any("refitted with the joint's calibration" in h.get("degenerate", "") for h in drift), drift
+    kept = [f for f in doc["findings"] if f["effect"] == "thermal_drift"]
+    for finding in kept:
+        assert THERMAL_DRIFT.degenerate(finding["parameters"], SimpleNamespace(duration=30.0)) is None, finding
+    if not kept:
+        drift = [h for r in doc["hypotheses_tested"] for h in r if h["effect"] == "thermal_drift"]
+        assert any("refitted with the joint's calibration" in h.get("degenerate", "") for h in drift), drift
     assert doc["verdict"] != "consistent"
