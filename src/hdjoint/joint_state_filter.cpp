@@ -48,7 +48,7 @@ JointTorque joint_state_torque(const JointState& x, const JointInput& in, const 
     if (p.Df != 0.0) {  // the structural damping of the elastic torsion rate, as the joint has it
         const double omega_l = x(joint_state::kOmegaL), omega_m = p.N * (omega_l + x(joint_state::kNu));
         double d[4];  // by theta_m, omega_m, theta_l, omega_l
-        elastic_torsion_rate_gradient(theta_m, omega_m, theta_l, omega_l, p, d);
+        elastic_torsion_rate_gradient(theta_m, omega_m, theta_l, omega_l, p, e_m, e_l, d);
         t.tau += p.Df * (d[1] * omega_m + d[3] * omega_l);  // the rate is linear in the speeds
         t.d_delta += p.Df * p.N * d[0];
         t.d_theta_l += p.Df * (p.N * d[0] + d[2]);

@@ -93,8 +93,14 @@ double elastic_torsion_rate(double theta_m, double omega_m, double theta_l, doub
 
 void elastic_torsion_rate_gradient(double theta_m, double omega_m, double theta_l, double omega_l,
                                    const Parameters& p, double d[4]) {
-    double dk_dm = 0.0, dk_dl = 0.0, dd_m = 0.0, dd_l = 0.0;
+    double dk_dm = 0.0, dk_dl = 0.0;
     kinematic_error_gradient(theta_m, theta_l, p, &dk_dm, &dk_dl);
+    elastic_torsion_rate_gradient(theta_m, omega_m, theta_l, omega_l, p, dk_dm, dk_dl, d);
+}
+
+void elastic_torsion_rate_gradient(double theta_m, double omega_m, double theta_l, double omega_l,
+                                   const Parameters& p, double dk_dm, double dk_dl, double d[4]) {
+    double dd_m = 0.0, dd_l = 0.0;
     kinematic_error_curvature(theta_m, theta_l, p, &dd_m, &dd_l);
     d[0] = -dd_m * omega_m;
     d[1] = 1.0 / p.N - dk_dm;

@@ -30,6 +30,9 @@ void kinematic_error_curvature(double theta_m, double theta_l, const Parameters&
 double elastic_torsion_rate(double theta_m, double omega_m, double theta_l, double omega_l, const Parameters& p);
 void elastic_torsion_rate_gradient(double theta_m, double omega_m, double theta_l, double omega_l,
                                    const Parameters& p, double d[4]);
+// The same, the kinematic error's gradient (kinematic_error_gradient) already at hand.
+void elastic_torsion_rate_gradient(double theta_m, double omega_m, double theta_l, double omega_l,
+                                   const Parameters& p, double dk_dm, double dk_dl, double d[4]);
 
 // eq. (4): torsion of the wave generator seen at the output, for a motor-side torque tau_w.
 double wave_generator_torsion(double tau_w, const Parameters& p);
