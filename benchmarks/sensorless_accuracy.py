@@ -38,7 +38,7 @@ from hdjoint.jobs.calibrate import placed_on
 from hdjoint.jobs.inputs import read_recording
 from hdjoint.jobs.estimate import as_written
 from hdjoint.diagnosis.rules import INTERVAL
-from hdjoint.jobs.joint_scale import SCALE_EVIDENCE_Z, scaled_interval, torque_power
+from hdjoint.jobs.joint_scale import SCALE_EVIDENCE_Z, torque_power, used_interval
 from hdjoint_truth.cases import EFFECT_CASES, JITTERED, TruthCase, draw, record
 
 import diagnosis_independent as independent
@@ -298,7 +298,7 @@ def _scaled_holds(rows: list[dict]) -> str:
         for name, e in r["parameters"].items():
             if name == "Kt" or not torque_power(name) or e.get("lo") is None or e.get("truth") is None:
                 continue
-            lo, hi = scaled_interval(e["estimate"], e["lo"], e["hi"], torque_power(name), scale, interval)
+            lo, hi = used_interval(name, e["estimate"], e["lo"], e["hi"], scale, interval)  # as calibrate writes it
             combined += lo <= e["truth"] <= hi
             alone += e["lo"] <= e["truth"] <= e["hi"]
             count += 1
