@@ -248,14 +248,14 @@ def exact_parameters_table(results) -> tuple[list[str], str]:
         lines.append(f"| {r['case'].name} | {f['tau_compliance'].rms:.3f} | {cells(cut)} | {cells(cuts(clean))} | "
                      f"{cells(cuts(known)) if known else '-'} | {c['tau_hat']:.1f} % / {c['tau_smooth']:.1f} % |")
     met = {n: sum(v >= goal for v in fine[n]) for n, goal in (("tau_hat", 70.0), ("tau_smooth", 80.0))}
+    span = lambda v: f"{min(v):.0f}-{max(v):.0f} %"  # noqa: E731
     verdict = (f"With exact parameters and fine encoders ({len(fine['tau_hat'])} cases): tau_hat "
-               f"{min(fine['tau_hat']):.0f}-{max(fine['tau_hat']):.0f} % below the compliance model, at least 70 % on "
-               f"{met['tau_hat']}; tau_smooth {min(fine['tau_smooth']):.0f}-{max(fine['tau_smooth']):.0f} %, at least "
-               f"80 % on {met['tau_smooth']}. With the load known (the run without its external load, the filter told "
-               f"the load is constant; where this is below the figure as run, the filter's trapezoidal step binds "
-               f"before the sensors do: benchmarks/joint_filter_cases.py, load_known_limit): tau_hat {min(limit['tau_hat']):.0f}-{max(limit['tau_hat']):.0f} %, tau_smooth "
-               f"{min(limit['tau_smooth']):.0f}-{max(limit['tau_smooth']):.0f} %. tau_smooth worse than tau_hat on: {', '.join(worse) or 'no case'}; "
-               f"coverage outside 93-97 %: {'; '.join(outside) or 'none'}.")
+               f"{span(fine['tau_hat'])} below the compliance model, at least 70 % on {met['tau_hat']}; tau_smooth "
+               f"{span(fine['tau_smooth'])}, at least 80 % on {met['tau_smooth']}. With the load known (the run "
+               "without its external load, the filter told the load is constant; where this is below the figure as "
+               "run, the filter's trapezoidal step binds before the sensors do: load_known_limit): tau_hat "
+               f"{span(limit['tau_hat'])}, tau_smooth {span(limit['tau_smooth'])}. tau_smooth worse than tau_hat on: "
+               f"{', '.join(worse) or 'no case'}; coverage outside 93-97 %: {'; '.join(outside) or 'none'}.")
     return lines, verdict
 
 
