@@ -95,8 +95,8 @@ def _summary(rows: list[dict]) -> str:
     cut = {n: 100.0 * np.mean(1.0 - np.array(v) / np.array(compliance)) for n, v in (("hat", hat), ("smooth", smooth))}
     return (f"median tau_compliance {np.median(compliance):.2f} %, tau_hat {np.median(hat):.2f} %, tau_smooth "
             f"{np.median(smooth):.2f} %; mean reduction below tau_compliance: tau_hat {cut['hat']:.0f} %, tau_smooth "
-            f"{cut['smooth']:.0f} % (goal 70, 80); worst tau_hat {max(hat):.2f} %, tau_smooth {max(smooth):.2f} %; within 2 %: "
-            f"tau_hat {sum(h <= 100 * sensorless.SPAN_GOAL for h in hat)}/{len(hat)}, tau_smooth "
+            f"{cut['smooth']:.0f} % (goal 70, 80); worst tau_hat {max(hat):.2f} %, tau_smooth {max(smooth):.2f} %; "
+            f"within 2 %: tau_hat {sum(h <= 100 * sensorless.SPAN_GOAL for h in hat)}/{len(hat)}, tau_smooth "
             f"{sum(s <= 100 * sensorless.SPAN_GOAL for s in smooth)}/{len(smooth)}; tau_smooth worse than tau_hat "
             f"on {sum(s > h for s, h in zip(smooth, hat))}; coverage (the lower of the two) median "
             f"{np.median(cover):.1f} %, within 93-97 % on {sum(93.0 <= c <= 97.0 for c in cover)}")

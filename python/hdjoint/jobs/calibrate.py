@@ -45,7 +45,8 @@ class CalibratedSet:
     verdict: str          # the diagnosis's verdict on the calibration recordings
     findings: list[dict]  # what it named: effect, kind, parameters
     scale: float          # the joint's torque scale applied to the estimates (joint_scale.py)
-    scale_interval: tuple[float, float] | None = None  # its interval at the diagnosis's coverage (None: a sensor set it)
+    scale_interval: tuple[float, float] | None = None  # its interval at the diagnosis's coverage (None: a sensor
+                                                       # set it)
 
     def document(self, recordings: list[str], jitter) -> dict:
         """The calibration as written beside the estimates (`<output>.calibration.json`), with the
