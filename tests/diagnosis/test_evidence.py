@@ -26,6 +26,11 @@ def test_controls_of_other_seeds_and_excitations_raise_no_alarm(seed, experiment
     _, doc = diagnose(record(case, 12.0, experiment), nominal_for(case))
     assert doc["verdict"] == "consistent", [(f["effect"], f["kind"], f["p_value"]) for f in doc["findings"]]
     assert all(c["lo"] <= c["estimate"] <= c["hi"] for c in doc["calibration"].values())
+    # Their correlations, for what the set leaves in a torque (jobs/calibration_spread.py): symmetric, within +-1.
+    rho = doc["calibration_correlation"]
+    assert rho and set(rho) <= set(doc["calibration"])
+    assert all(abs(r) <= 1.0 and rho[m][n] == r for n, row in rho.items() for m, r in row.items())
+    assert any(abs(r) > 0.3 for row in rho.values() for r in row.values())  # some parameters trade off
 
 
 @pytest.mark.slow

@@ -70,9 +70,7 @@ def priors(names, nominal: dict, tolerance: dict[str, float], centres: dict | No
 def posterior_std(jacobian: np.ndarray, scale: np.ndarray) -> np.ndarray:
     """Laplace standard deviations from the Jacobian of the whitened residuals
     (data and priors) in the fit's scaled coordinates."""
-    info = jacobian.T @ jacobian
-    cov = np.linalg.pinv(info)
-    return np.sqrt(np.clip(np.diag(cov), 0.0, None)) * scale
+    return _std(np.linalg.pinv(jacobian.T @ jacobian), scale)
 
 
 def robust_std(jacobian: np.ndarray, residuals: np.ndarray, blocks: np.ndarray, scale: np.ndarray) -> np.ndarray:
@@ -81,18 +79,35 @@ def robust_std(jacobian: np.ndarray, residuals: np.ndarray, blocks: np.ndarray, 
     blocks (`blocks`: a label per data row, rows past them are the priors'),
     P the priors' information. Equal to posterior_std when the residuals are
     white and the model's form is right."""
+    return _std(robust_covariance(jacobian, residuals, blocks), scale)
+
+
+def robust_covariance(jacobian: np.ndarray, residuals: np.ndarray, blocks: np.ndarray) -> np.ndarray:
+    """robust_std's covariance in the fit's scaled coordinates (Laplace's with fewer than 3 blocks)."""
     info = jacobian.T @ jacobian
     n = len(blocks)
     scores = jacobian[:n] * residuals[:n, None]
     labels, which = np.unique(blocks, return_inverse=True)
+    inverse = np.linalg.pinv(info)
     if len(labels) < 3:
-        return posterior_std(jacobian, scale)
+        return inverse
     per_block = np.zeros((len(labels), jacobian.shape[1]))
     np.add.at(per_block, which, scores)
     per_block -= per_block.mean(axis=0)  # with priors the data's score sums to the priors', not to 0
     meat = per_block.T @ per_block * len(labels) / (len(labels) - 1) + jacobian[n:].T @ jacobian[n:]
-    inverse = np.linalg.pinv(info)
-    cov = inverse @ meat @ inverse
+    return inverse @ meat @ inverse
+
+
+def correlation(cov: np.ndarray) -> np.ndarray:
+    """The correlation matrix of a covariance (0 off the diagonal of a parameter with no spread)."""
+    sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r = np.where(np.outer(sd, sd) > 0.0, cov / np.outer(sd, sd), 0.0)
+    np.fill_diagonal(r, 1.0)
+    return np.clip(r, -1.0, 1.0)
+
+
+def _std(cov: np.ndarray, scale: np.ndarray) -> np.ndarray:
     return np.sqrt(np.clip(np.diag(cov), 0.0, None)) * scale
 
 

@@ -295,6 +295,14 @@ def finding_document(result, f) -> dict:
     return out
 
 
+def calibration_correlation(result) -> dict:
+    """The calibrated parameters' posterior correlations from the fit that gave their intervals ({name:
+    {other: r}}, rounded; a pair that fit did not estimate together is left out: independent)."""
+    names = set(result.calibration)
+    return {n: {m: round(r, 4) for m, r in row.items() if m in names}
+            for n, row in result.last_fit.correlation.items() if n in names}
+
+
 def document(result) -> dict:
     diag = result.objective
     if result.findings:
@@ -307,6 +315,7 @@ def document(result) -> dict:
         "findings": [finding_document(result, f) for f in result.findings],
         "params": result.params,
         "calibration": {n: c.as_dict() for n, c in result.calibration.items()},
+        "calibration_correlation": calibration_correlation(result),
         "beyond_tolerance": [c.name for c in result.beyond_tolerance],
         "not_testable": result.not_testable,
         "orders_not_found": result.orders_not_found,

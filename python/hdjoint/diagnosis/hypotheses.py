@@ -29,6 +29,8 @@ class Fit:
     std: dict = field(default_factory=dict)
     std_laplace: dict = field(default_factory=dict)
     std_robust: dict = field(default_factory=dict)
+    # The fitted parameters' posterior correlation (the cluster-robust covariance's): {name: {other: r}}.
+    correlation: dict = field(default_factory=dict)
 
 
 @dataclass

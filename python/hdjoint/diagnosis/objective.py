@@ -11,7 +11,7 @@ import math
 import numpy as np
 from scipy.optimize import least_squares
 
-from hdjoint.diagnosis.calibration import Prior, posterior_std, robust_std, widened
+from hdjoint.diagnosis.calibration import Prior, correlation, posterior_std, robust_covariance, widened
 from hdjoint.diagnosis.channels import Channel
 from hdjoint.diagnosis.effects import ALWAYS_CALIBRATED, calibrated_parameters, orthogonal_parameters
 from hdjoint.diagnosis.effects.base import RecordingScale
@@ -225,10 +225,12 @@ class Objective:
         fitted.update(zip(names, sol.x * scale))
         laplace = posterior_std(sol.jac, scale)
         blocks = np.tile(self.fit_index * SCORE_BLOCKS // len(self.rec), len(channels))
-        robust = robust_std(sol.jac, sol.fun, blocks, scale)
+        cov = robust_covariance(sol.jac, sol.fun, blocks)
+        robust = np.sqrt(np.clip(np.diag(cov), 0.0, None)) * scale
         wider = {n: widened(n, s) for n, s in zip(names, np.maximum(laplace, robust))}
-        return Fit(fitted, list(names), float(sol.cost), wider,
-                   dict(zip(names, laplace)), dict(zip(names, robust)))
+        r = correlation(cov)  # scale-free: the same in the parameters' own units
+        return Fit(fitted, list(names), float(sol.cost), wider, dict(zip(names, laplace)), dict(zip(names, robust)),
+                   {n: {m: float(r[i, j]) for j, m in enumerate(names) if j != i} for i, n in enumerate(names)})
 
     def anchors(self, part: str, stateful: bool = False) -> list[str]:
         """The calibrated parameters of `part`, refitted with every hypothesis

@@ -32,6 +32,7 @@ from hdjoint.io import parameters
 from hdjoint.io.outputs import check_replaceable, replace_into
 from hdjoint.io.recording import Recording
 from hdjoint.jobs.diagnose import screened_recordings
+from hdjoint.jobs.calibration_spread import calibration_spread, widen_deviations
 from hdjoint.jobs.inputs import UserError, check_output_file, read_params, read_recording
 from hdjoint.jobs.joint_scale import (SCALE_EVIDENCE_Z, joint_scale, scale_interval, scaled, used_interval,
                                      torque_power)
@@ -47,10 +48,13 @@ class CalibratedSet:
     scale: float          # the joint's torque scale applied to the estimates (joint_scale.py)
     scale_interval: tuple[float, float] | None = None  # its interval at the diagnosis's coverage (None: a sensor
                                                        # set it)
+    estimates: dict | None = None  # every parameter's estimate before the scale (the calibrated ones and the rest)
+    correlation: dict | None = None  # the calibrated parameters' posterior correlations ({name: {other: r}})
 
-    def document(self, recordings: list[str], jitter) -> dict:
+    def document(self, recordings: list[str], jitter, spread=None) -> dict:
         """The calibration as written beside the estimates (`<output>.calibration.json`), with the
-        reading-time JITTER the estimate ran with (a property of the estimated recording, not calibrated)."""
+        reading-time JITTER the estimate ran with (a property of the estimated recording, not calibrated)
+        and, with SPREAD (calibration_spread), what each parameter's interval leaves in tau_hat."""
         from hdjoint.jobs.estimate import READING_JITTER
         table = parameters.table()
         return {"calibrated_from": list(recordings), "verdict": self.verdict, "findings": self.findings,
@@ -65,7 +69,12 @@ class CalibratedSet:
                                for name, entry in self.calibration.items()},
                 "reading_time_jitter": {"parameter": READING_JITTER, "unit": "s", "used": jitter.std,
                                         "lo": jitter.lo, "hi": jitter.hi, "how": jitter.reason,
-                                        "in_words": jitter.describe()}}
+                                        "in_words": jitter.describe()},
+                **({"tau_hat_deviation": {
+                    "unit": "N.m", "how": "RMS over the estimated recording of the deviation of tau_hat the "
+                    "calibrated parameters' intervals and correlations leave, and the joint's torque scale's "
+                    "interval; tau_ukf_std, tau_hat_std and tau_smooth_std carry it beside the filters' own",
+                    **{k: round(v, 6) for k, v in spread.shares.items()}}} if spread else {})}
 
     def describe_scale(self) -> str:
         """The joint's torque scale in words, for the summary: the one thing the recordings could not say."""
@@ -112,7 +121,8 @@ def calibrate_from(paths: list[str], params_path: str | None, time_unit: str | N
                     name, entry["estimate"], entry["lo"], entry["hi"], scale, interval)
     findings = [{"effect": f["effect"], "kind": f["kind"], "parameters": f.get("parameters", {})}
                 for f in doc["findings"]]
-    return CalibratedSet(params, table, doc["verdict"], findings, scale, interval)
+    return CalibratedSet(params, table, doc["verdict"], findings, scale, interval, estimates,
+                         doc.get("calibration_correlation", {}))
 
 
 def placed_on(rec: Recording, params: dict) -> dict:
@@ -138,18 +148,24 @@ def estimate_calibrated(opts, calibrate_paths: list[str]):
     everything was computed. The set leaves the reading-time jitter out unless
     OPTS.params sets it: each recording's own is measured. Returns the
     estimate's Estimated and the CalibratedSet."""
-    from hdjoint.jobs.estimate import as_written, estimate_to_file
+    from hdjoint.jobs.estimate import READING_JITTER, as_written, estimate_to_file
     params_file, document_file = sidecars(opts.output)
     check_output_file(opts.output, inputs=(opts.recording, opts.params, *calibrate_paths))
     for side in (params_file, document_file):
         check_output_file(side, inputs=(opts.recording, opts.params, *calibrate_paths))
     calibrated = calibrate_from(calibrate_paths, opts.params, opts.time_unit, opts.current_sign)
-    run = placed_on(read_recording(opts.recording, opts.time_unit, opts.current_sign), calibrated.params)
+    run_rec = read_recording(opts.recording, opts.time_unit, opts.current_sign)
+    run = placed_on(run_rec, calibrated.params)
     with tempfile.TemporaryDirectory(dir=Path(opts.output).absolute().parent) as tmp:
         stage = Path(tmp)
         parameters.save(stage / "params.json", as_written(run, opts.params))
         estimated = estimate_to_file(replace(opts, params=str(stage / "params.json"), output=str(stage / "estimates")))
-        document = calibrated.document(calibrate_paths, estimated.jitter)
+        _progress("the calibration's share of the deviations: the set moved along its posterior's axes")
+        spread = calibration_spread(run_rec, {**run, READING_JITTER: estimated.jitter.std}, calibrated.calibration,
+                                    calibrated.correlation, calibrated.estimates, calibrated.scale,
+                                    calibrated.scale_interval)
+        widen_deviations(str(stage / "estimates"), spread)
+        document = calibrated.document(calibrate_paths, estimated.jitter, spread)
         (stage / "calibration.json").write_text(json.dumps(document, indent=2) + "\n")
         for staged, target in ((stage / "params.json", params_file), (stage / "calibration.json", document_file),
                                (stage / "estimates", Path(opts.output))):
