@@ -76,6 +76,10 @@ def unresolved_harmonics(rec: Recording, p: dict) -> dict[str, str]:
     return out
 
 
+# The encoder zero: a property of each recording, placed on it (place_offset), never carried from another.
+ENCODER_ZERO = "a0"
+
+
 def place_offset(rec: Recording, p: dict, reference_torque: np.ndarray) -> dict:
     """`p` with a0 placed so the transmission's median torsion on `rec` matches
     the reference torque's: encoder zeros are arbitrary per recording (power
@@ -86,7 +90,7 @@ def place_offset(rec: Recording, p: dict, reference_torque: np.ndarray) -> dict:
     cf, kf = p["Cf"], p["Kf"]
     ref_torsion = np.arctan(cf * reference_torque) / (cf * kf) if cf > 1e-12 else reference_torque / kf
     shift = float(np.nanmedian(est["dtheta_f"] - ref_torsion))
-    return dict(p, a0=p["a0"] + shift)
+    return dict(p, **{ENCODER_ZERO: p[ENCODER_ZERO] + shift})
 
 
 def joined(recordings: list[Recording]) -> tuple[Recording, np.ndarray, np.ndarray, np.ndarray]:

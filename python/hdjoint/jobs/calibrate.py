@@ -163,7 +163,7 @@ def estimate_calibrated(opts, calibrate_paths: list[str]):
         _progress("the calibration's share of the deviations: the set moved along its posterior's axes")
         spread = calibration_spread(run_rec, {**run, READING_JITTER: estimated.jitter.std}, calibrated.calibration,
                                     calibrated.correlation, calibrated.estimates, calibrated.scale,
-                                    calibrated.scale_interval)
+                                    calibrated.scale_interval, lambda p: placed_on(run_rec, p))
         widen_deviations(str(stage / "estimates"), spread)
         document = calibrated.document(calibrate_paths, estimated.jitter, spread)
         (stage / "calibration.json").write_text(json.dumps(document, indent=2) + "\n")

@@ -21,6 +21,7 @@ import numpy as np
 from scipy.stats import norm
 
 from hdjoint.diagnosis.effects import HELD_WITHOUT_SENSOR as HELD
+from hdjoint.diagnosis.prepare import ENCODER_ZERO
 from hdjoint.diagnosis.rules import INTERVAL
 from hdjoint.io import parameters
 from hdjoint.io.recording import CHUNK_ROWS, Recording
@@ -38,11 +39,12 @@ class CalibrationSpread:
 
 
 def principal_axes(calibration: dict, correlation: dict) -> tuple[list[str], np.ndarray]:
-    """The calibrated parameters with a spread (not the held one: the scale is its own axis) and the
-    columns of one deviation along each axis of their posterior, in their own units."""
+    """The calibrated parameters with a spread and the columns of one deviation along each axis of their
+    posterior (its marginal over them), in their own units. Not the held one (the scale is its own axis),
+    nor the encoder zero (placed anew on each recording, with each set)."""
     z = norm.ppf(0.5 + INTERVAL / 2.0)
     names = [n for n, e in calibration.items()
-             if n != HELD and e.get("lo") is not None and e["lo"] < e["hi"]]
+             if n not in (HELD, ENCODER_ZERO) and e.get("lo") is not None and e["lo"] < e["hi"]]
     sd = np.array([(calibration[n]["hi"] - calibration[n]["lo"]) / (2.0 * z) for n in names])
     r = np.eye(len(names))
     for i, n in enumerate(names):
@@ -57,7 +59,8 @@ def principal_axes(calibration: dict, correlation: dict) -> tuple[list[str], np.
 
 def _sets(run_params: dict, calibration: dict, correlation: dict, estimates: dict, scale: float,
           interval: tuple[float, float] | None):
-    """(share, the two sets either way) along each axis: RUN_PARAMS moved, as it is used (scaled)."""
+    """(share, the two sets either way) along each axis: RUN_PARAMS moved, as it is used (scaled); the
+    encoder zero is placed on the recording for each set by the caller."""
     names, axes = principal_axes(calibration, correlation)
     table = parameters.table()
     within = lambda n, v: min(max(v, table[n].min), table[n].max)  # noqa: E731  (a range's limit is no spread)
@@ -76,16 +79,16 @@ def _sets(run_params: dict, calibration: dict, correlation: dict, estimates: dic
 
 
 def calibration_spread(rec: Recording, run_params: dict, calibration: dict, correlation: dict, estimates: dict,
-                       scale: float, interval: tuple[float, float] | None) -> CalibrationSpread:
+                       scale: float, interval: tuple[float, float] | None, place) -> CalibrationSpread:
     """The calibration's variance of each estimate on REC: RUN_PARAMS is the set the estimate ran with
     (Ts and jsf_r_time included), CALIBRATION the per-parameter entries (estimate, lo, hi) with their
     CORRELATION, ESTIMATES the values before the joint's torque SCALE, INTERVAL the scale's (None: a torque
-    sensor set it). The smoother's is taken as the filter's: a parameter moves both estimates alike, and the
+    sensor set it); PLACE(set) places the encoder zero on REC for a set. The smoother's is taken as the filter's: a parameter moves both estimates alike, and the
     smoother's records would cost a kilobyte a sample for each run."""
     variance = {std: np.zeros(len(rec.time)) for std in DEVIATIONS.values()}
     share = {PARAMETERS: np.zeros(len(rec.time)), SCALE: np.zeros(len(rec.time))}
     for which, ends in _sets(run_params, calibration, correlation, estimates, scale, interval):
-        low, high = (_filtered(rec, p) for p in ends)
+        low, high = (_filtered(rec, place(p)) for p in ends)
         for n in ("tau_ukf", "tau_hat"):
             # Half the difference over one deviation either way; a torque no state explains: no spread known.
             spread_sq = np.nan_to_num((high[n] - low[n]) / 2.0) ** 2
