@@ -531,9 +531,17 @@ RtsBackward::Torque RtsBackward::step(const JointFilterRecord& r) {
     Ps_ = Ps;
     next_ = r;
     has_next_ = true;
-    const JointTorque T = joint_state_torque(xs_, r.input, p_);
-    return {T.valid ? T.tau : std::nan(""), std::sqrt(std::max(JointStateFilter::torque_variance(T, Ps_), 0.0) +
-                                                      JointStateFilter::unseen_variance(p_))};
+    const auto torque = [this, &r](const JointState& x, const JointCovariance& P) -> Torque {
+        const JointTorque T = joint_state_torque(x, r.input, p_);
+        if (!T.valid) return {std::nan(""), std::nan("")};
+        return {T.tau, std::sqrt(std::max(JointStateFilter::torque_variance(T, P), 0.0) +
+                                 JointStateFilter::unseen_variance(p_))};
+    };
+    Torque t = torque(xs_, Ps_);
+    if (!std::isfinite(t.tau)) t = torque(r.x, r.P);
+    if (!std::isfinite(t.tau)) t = given_;
+    given_ = t;
+    return t;
 }
 
 SmoothedTorque smooth_joint_states(const std::vector<JointFilterRecord>& records, const Parameters& p) {

@@ -60,6 +60,7 @@
 // (its quantisation error is the same, not a fresh one; kRepeatedReadingWeight).
 // Output: tau(x) and its standard deviation from P, with the variance of the
 // current sensor's offset (jsf_current_offset), which no state can see.
+#include <cmath>
 #include <cstddef>
 #include <vector>
 
@@ -348,6 +349,10 @@ public:
         double tau, tau_std;
     };
     // The smoothed torque at `r`, the sample just before the one last given.
+    // Where no torque explains the smoothed state (its torsion past eq. (8)'s
+    // pole: a large correction on a poor model), the filter's own at `r` is
+    // given with its deviation, and failing that the later sample's (NaN only
+    // while no torque has been explained yet).
     Torque step(const JointFilterRecord& r);
 
 private:
@@ -356,6 +361,7 @@ private:
     JointFilterRecord next_;                        // the later sample
     JointState xs_ = JointState::Zero();            // and its smoothed state
     JointCovariance Ps_ = JointCovariance::Zero();  // and covariance
+    Torque given_{std::nan(""), std::nan("")};      // the torque given for the later sample
 };
 
 // The RTS smoother over filter records (one per sample, in order): the

@@ -320,6 +320,29 @@ def test_the_lara8_gap_makes_no_spike(tmp_path, capsys):
     assert est["tau_hat_std"][longest] > 2.0 * np.median(est["tau_hat_std"])
 
 
+def test_the_smoother_writes_no_nan_where_no_torque_explains_its_state(tmp_path):
+    """The real LARA8 recording of joint 2 (as in the gap test) with the filter told of 25 times more
+    unmodelled motor torque (jsf_q_motor): on this poorly modelled joint the smoother's large corrections put
+    the smoothed torsion past eq. (8)'s pole on ten rows, where tau_smooth was NaN. There it gives the
+    filter's own torque and deviation."""
+    import dataclasses
+    import json
+    from pathlib import Path
+
+    from hdjoint.app import cli
+    from hdjoint.io.recording import read_recording, write_recording
+    data = Path(__file__).resolve().parents[1] / "data"
+    rec = read_recording(data / "lara8" / "joint2_jog_joint_mass.csv")
+    write_recording(tmp_path / "run.csv", dataclasses.replace(rec, i_m=-rec.i_m))
+    params = json.loads((data / "lara8_joint2_params.json").read_text())
+    (tmp_path / "p.json").write_text(json.dumps({**params, "jsf_q_motor": 25 * params["jsf_q_motor"]}))
+    assert cli.main(["estimate", str(tmp_path / "run.csv"), "--params", str(tmp_path / "p.json"), "--smooth",
+                     "--allow-jitter", "--engine", "batch", "-o", str(tmp_path / "est.csv")]) == 0
+    est = np.genfromtxt(tmp_path / "est.csv", delimiter=",", names=True)
+    for name in ("tau_hat", "tau_hat_std", "tau_smooth", "tau_smooth_std"):
+        assert np.all(np.isfinite(est[name])), (name, np.flatnonzero(~np.isfinite(est[name])))
+
+
 def test_the_filter_carries_the_joints_structural_damping():
     """A joint with structural damping (Df = 5 N.m.s/rad, about 8 % of critical at the torsional mode):
     the transmitted torque carries Df times the elastic torsion rate. A filter without it followed a spring
