@@ -70,7 +70,7 @@ def priors(names, nominal: dict, tolerance: dict[str, float], centres: dict | No
 def posterior_std(jacobian: np.ndarray, scale: np.ndarray) -> np.ndarray:
     """Laplace standard deviations from the Jacobian of the whitened residuals
     (data and priors) in the fit's scaled coordinates."""
-    return _std(np.linalg.pinv(jacobian.T @ jacobian), scale)
+    return deviations(np.linalg.pinv(jacobian.T @ jacobian), scale)
 
 
 def robust_std(jacobian: np.ndarray, residuals: np.ndarray, blocks: np.ndarray, scale: np.ndarray) -> np.ndarray:
@@ -79,7 +79,7 @@ def robust_std(jacobian: np.ndarray, residuals: np.ndarray, blocks: np.ndarray, 
     blocks (`blocks`: a label per data row, rows past them are the priors'),
     P the priors' information. Equal to posterior_std when the residuals are
     white and the model's form is right."""
-    return _std(robust_covariance(jacobian, residuals, blocks), scale)
+    return deviations(robust_covariance(jacobian, residuals, blocks), scale)
 
 
 def robust_covariance(jacobian: np.ndarray, residuals: np.ndarray, blocks: np.ndarray) -> np.ndarray:
@@ -107,7 +107,8 @@ def correlation(cov: np.ndarray) -> np.ndarray:
     return np.clip(r, -1.0, 1.0)
 
 
-def _std(cov: np.ndarray, scale: np.ndarray) -> np.ndarray:
+def deviations(cov: np.ndarray, scale: np.ndarray) -> np.ndarray:
+    """The standard deviations of a covariance in the fit's scaled coordinates, in the parameters' units."""
     return np.sqrt(np.clip(np.diag(cov), 0.0, None)) * scale
 
 

@@ -11,7 +11,8 @@ import math
 import numpy as np
 from scipy.optimize import least_squares
 
-from hdjoint.diagnosis.calibration import Prior, correlation, posterior_std, robust_covariance, widened
+from hdjoint.diagnosis.calibration import (Prior, correlation, deviations, posterior_std, robust_covariance,
+                                           widened)
 from hdjoint.diagnosis.channels import Channel
 from hdjoint.diagnosis.effects import ALWAYS_CALIBRATED, calibrated_parameters, orthogonal_parameters
 from hdjoint.diagnosis.effects.base import RecordingScale
@@ -226,7 +227,7 @@ class Objective:
         laplace = posterior_std(sol.jac, scale)
         blocks = np.tile(self.fit_index * SCORE_BLOCKS // len(self.rec), len(channels))
         cov = robust_covariance(sol.jac, sol.fun, blocks)
-        robust = np.sqrt(np.clip(np.diag(cov), 0.0, None)) * scale
+        robust = deviations(cov, scale)
         wider = {n: widened(n, s) for n, s in zip(names, np.maximum(laplace, robust))}
         r = correlation(cov)  # scale-free: the same in the parameters' own units
         return Fit(fitted, list(names), float(sol.cost), wider, dict(zip(names, laplace)), dict(zip(names, robust)),

@@ -54,7 +54,8 @@ class CalibratedSet:
     def document(self, recordings: list[str], jitter, spread=None) -> dict:
         """The calibration as written beside the estimates (`<output>.calibration.json`), with the
         reading-time JITTER the estimate ran with (a property of the estimated recording, not calibrated)
-        and, with SPREAD (calibration_spread), what each parameter's interval leaves in tau_hat."""
+        and, with SPREAD (calibration_spread), what the calibrated parameters and the torque scale leave in
+        tau_hat."""
         from hdjoint.jobs.estimate import READING_JITTER
         table = parameters.table()
         return {"calibrated_from": list(recordings), "verdict": self.verdict, "findings": self.findings,
@@ -71,8 +72,8 @@ class CalibratedSet:
                                         "lo": jitter.lo, "hi": jitter.hi, "how": jitter.reason,
                                         "in_words": jitter.describe()},
                 **({"tau_hat_deviation": {
-                    "unit": "N.m", "how": "RMS over the estimated recording of the deviation of tau_hat the "
-                    "calibrated parameters' intervals and correlations leave, and the joint's torque scale's "
+                    "unit": "N.m", "how": "RMS over the estimated recording of tau_hat's deviation from the "
+                    "calibrated parameters' intervals and correlations, and from the joint torque scale's "
                     "interval; tau_ukf_std, tau_hat_std and tau_smooth_std carry it beside the filters' own",
                     **{k: round(v, 6) for k, v in spread.shares.items()}}} if spread else {})}
 
