@@ -28,7 +28,7 @@ import numpy as np
 
 from hdjoint.diagnosis import normal as norm
 from hdjoint.io import parameters
-from hdjoint.diagnosis.rules import IDENTIFIED_RATIO, INTERVAL, RESIZE_Z
+from hdjoint.diagnosis.rules import IDENTIFIED_RATIO, INTERVAL_Z, RESIZE_Z
 
 # Written by benchmarks/interval_coverage.py --fit-factors, with where it was measured.
 MODEL_FORM_FACTORS = Path(__file__).with_name("model_form_factors.json")
@@ -123,7 +123,7 @@ class Calibrated:
     @property
     def interval(self) -> tuple[float, float]:
         info = parameters.table()[self.name]
-        half = norm.ppf(0.5 + INTERVAL / 2) * self.std
+        half = INTERVAL_Z * self.std
         return max(self.estimate - half, info.min), min(self.estimate + half, info.max)
 
     @property

@@ -26,8 +26,7 @@ import math
 
 import numpy as np
 
-from hdjoint.diagnosis import normal as norm
-from hdjoint.diagnosis.rules import INTERVAL
+from hdjoint.diagnosis.rules import INTERVAL_Z
 
 
 def fit_shift(residual, step: float) -> tuple[float, float]:
@@ -59,7 +58,7 @@ def align_current(diag, p: dict) -> dict | None:
     diag.prep.current_shift = estimate
     # Laplace on the data term (weighted as the calibration's), flat within the bounds.
     std = 1.0 / math.sqrt(diag.data_weight * curvature) if curvature > 0 else math.inf
-    half = norm.ppf(0.5 + INTERVAL / 2) * std
+    half = INTERVAL_Z * std
     return {"estimate": estimate, "lo": float(max(estimate - half, held)), "hi": float(min(estimate + half, 0.0)),
             "bounds": [held, 0.0], "unit": "s",
             "meaning": "the current at an encoder sample is the logged one read this much later "

@@ -9,7 +9,7 @@ import numpy as np
 from hdjoint import _core
 from hdjoint.io import parameters
 from hdjoint.estimation.metrics import error_figures
-from hdjoint.diagnosis.rules import INTERVAL
+from hdjoint.diagnosis.rules import INTERVAL_Z
 from hdjoint.diagnosis.cannot_tell import cannot_tell
 from hdjoint.diagnosis.rules import FALSE_DISCOVERY_RATE, LOCATED_GAIN, LOCATED_Z
 from hdjoint.diagnosis.significance import NullNoise, benjamini_hochberg, null_z, p_value
@@ -227,11 +227,10 @@ def separate_by(effects) -> str:
 
 
 def _interval(fit_std: dict, params: dict, name: str) -> list[float] | None:
-    from hdjoint.diagnosis import normal as norm
     std = fit_std.get(name)
     if std is None or not np.isfinite(std):
         return None
-    half = float(norm.ppf(0.5 + INTERVAL / 2) * std)
+    half = float(INTERVAL_Z * std)
     return [params[name] - half, params[name] + half]
 
 

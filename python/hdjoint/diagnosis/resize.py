@@ -18,7 +18,7 @@ from hdjoint.diagnosis.hypotheses import Finding
 from hdjoint.diagnosis.objective import Objective
 from hdjoint.diagnosis.prepare import unresolved_harmonics
 from hdjoint.diagnosis.rules import (EVIDENCE_Z, FALSE_DISCOVERY_RATE, GROSS_CHECKED, GROSS_FACTOR, GROSS_RATIO,
-                                     HYPOTHESIS_FTOL, INTERVAL, MIN_GAIN, RESIZE_Z)
+                                     HYPOTHESIS_FTOL, INTERVAL_Z, MIN_GAIN, RESIZE_Z)
 from hdjoint.diagnosis.select import Selection
 from hdjoint.diagnosis.structure import held_out_gain_sq
 from hdjoint.io import parameters
@@ -158,7 +158,7 @@ def released(objective: Objective, selection: Selection, calibration: dict[str, 
             needed = gain.gain > MIN_GAIN and p_value <= level and gain.z > EVIDENCE_Z
         else:  # within tolerances but off by a factor: its released interval must exclude that factor
             p_value = float(norm.sf(abs(estimate - edge) / max(std, 1e-300)))
-            needed = p_value <= level and abs(estimate - edge) > norm.ppf(0.5 + INTERVAL / 2) * std
+            needed = p_value <= level and abs(estimate - edge) > INTERVAL_Z * std
         objective.say(f"{n}: released to {estimate:.4g} (nominal {prior.centre:.4g}); held at {edge:.4g}, "
                       f"held-out gain {100 * gain.gain:.2f} % (z = {gain.z:.1f}), p = {p_value:.2g}")
         if not needed:

@@ -7,6 +7,8 @@ named; its figures are in docs/results/, not here.
 """
 from __future__ import annotations
 
+from hdjoint.diagnosis import normal
+
 # --- What a recording must have -------------------------------------------
 MIN_SAMPLES = 500      # fewer samples than this cannot fill the held-out folds
 MIN_DURATION = 2.0     # s: shorter recordings hold no repeated motion to compare folds over
@@ -98,6 +100,7 @@ GROSS_RATIO = 2.0
 RESIZE_Z = 3.0          # |estimate - nominal| / tolerance beyond which a parameter counts as resized
 IDENTIFIED_RATIO = 0.5  # posterior std / prior std below which the recording identifies a parameter
 INTERVAL = 0.95         # every fitted parameter's interval
+INTERVAL_Z = float(normal.ppf(0.5 + INTERVAL / 2))  # its half-width in standard deviations (1.96)
 
 # --- What the recording cannot tell (cannot_tell) -------------------------
 SEEN_GAIN = 0.02        # a hypothesis explaining this much, with SEEN_BIC, was seen though not accepted

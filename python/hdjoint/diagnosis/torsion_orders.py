@@ -22,9 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hdjoint.diagnosis import normal as norm
 from hdjoint.diagnosis.significance import NullNoise, benjamini_hochberg, null_z, p_value
-from hdjoint.diagnosis.rules import INTERVAL
+from hdjoint.diagnosis.rules import INTERVAL_Z
 from hdjoint.diagnosis.structure import HeldOutGain, held_out_gain
 
 # A motor order needs the motor to turn this often: half orders apart, a ripple told from a drift.
@@ -94,7 +93,7 @@ def order_evidence(torsion: np.ndarray, nuisance: np.ndarray, angle: np.ndarray,
         left = residual[train] - ripple[train] @ c
         dof = max(len(rows) - nuisance.shape[1] - 2, 1)
         cov = np.linalg.pinv(ripple[train].T @ ripple[train]) * float(left @ left) / dof * correlation_length(left)
-        half = float(norm.ppf(0.5 + INTERVAL / 2) * np.sqrt(np.max(np.clip(np.diag(cov), 0.0, None))))
+        half = float(INTERVAL_Z * np.sqrt(np.max(np.clip(np.diag(cov), 0.0, None))))
         gain = held_out_gain(residual, ripple @ c, fold, test)
         z_null = null_z(noise, ripple[None, :, :], rows, fold, test)
         out.append(TorsionOrder(angle_name, float(k), float(c[0]), float(c[1]), half, gain,
