@@ -1,4 +1,4 @@
-"""`hdjoint diagnose` starts without scipy.stats (its distributions'
+"""`hdjoint diagnose` and `hdjoint estimate --calibrate-from` start without scipy.stats (its distributions'
 docstrings take a third of a second to build) nor matplotlib (imported by
 the report's helper while the diagnosis runs): the normal distribution and
 Spearman's correlation it uses give scipy.stats's numbers bit for bit."""
@@ -14,8 +14,8 @@ from hdjoint.diagnosis.effects.needs import spearman
 
 
 def test_diagnose_imports_neither_scipy_stats_nor_matplotlib():
-    code = ("import sys; import hdjoint.app.cli, hdjoint.jobs.diagnose, hdjoint.diagnosis.pipeline, "
-            "hdjoint.diagnosis.report; print(sorted(m for m in ('scipy.stats', 'matplotlib') if m in sys.modules))")
+    code = ("import sys; import hdjoint.app.cli, hdjoint.jobs.diagnose, hdjoint.jobs.calibrate, "
+            "hdjoint.diagnosis.pipeline, hdjoint.diagnosis.report; print(sorted(m for m in ('scipy.stats', 'matplotlib') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
 

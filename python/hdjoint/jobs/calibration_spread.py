@@ -18,11 +18,11 @@ import os
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import norm
 
 from hdjoint.diagnosis.effects import HELD_WITHOUT_SENSOR as HELD
 from hdjoint.diagnosis.prepare import ENCODER_ZERO
-from hdjoint.diagnosis.rules import INTERVAL
+from hdjoint.diagnosis.rules import INTERVAL_Z
+from hdjoint.estimation.engines import INPUTS, CoreEngine, RowFeeder
 from hdjoint.io import parameters
 from hdjoint.io.recording import CHUNK_ROWS, Recording
 from hdjoint.jobs.joint_scale import scaled, torque_power
@@ -42,10 +42,9 @@ def principal_axes(calibration: dict, correlation: dict) -> tuple[list[str], np.
     """The calibrated parameters with a spread and the columns of one deviation along each axis of their
     posterior (its marginal over them), in their own units. Not the held one (the scale is its own axis),
     nor the encoder zero (placed anew on each recording, with each set)."""
-    z = norm.ppf(0.5 + INTERVAL / 2.0)
     names = [n for n, e in calibration.items()
              if n not in (HELD, ENCODER_ZERO) and e.get("lo") is not None and e["lo"] < e["hi"]]
-    sd = np.array([(calibration[n]["hi"] - calibration[n]["lo"]) / (2.0 * z) for n in names])
+    sd = np.array([(calibration[n]["hi"] - calibration[n]["lo"]) / (2.0 * INTERVAL_Z) for n in names])
     r = np.eye(len(names))
     for i, n in enumerate(names):
         for j, m in enumerate(names):
@@ -63,17 +62,17 @@ def _sets(run_params: dict, calibration: dict, correlation: dict, estimates: dic
     encoder zero is placed on the recording for each set by the caller."""
     names, axes = principal_axes(calibration, correlation)
     table = parameters.table()
-    within = lambda n, v: min(max(v, table[n].min), table[n].max)  # noqa: E731  (a range's limit is no spread)
-    for k in range(axes.shape[1]):
-        yield PARAMETERS, tuple(
-            {**run_params, **{n: v for n, v in scaled({**estimates, **{m: within(m, estimates[m] + sign * axes[i, k])
-                                                                       for i, m in enumerate(names)}}, scale).items()
-                              if n in names}}
-            for sign in (-1.0, 1.0))
+
+    def moved(step: np.ndarray) -> dict:
+        # Within each range (its limit is no spread), then scaled as calibrate-from scales the set.
+        at = {n: min(max(estimates[n] + d, table[n].min), table[n].max) for n, d in zip(names, step)}
+        return {**run_params, **{n: v for n, v in scaled({**estimates, **at}, scale).items() if n in at}}
+
+    for axis in axes.T:
+        yield PARAMETERS, (moved(-axis), moved(axis))
     if interval is not None:
-        z = norm.ppf(0.5 + INTERVAL / 2.0)
-        # The interval's ends are z deviations apart on each side: one deviation is that share of the way.
-        ends = [scale + (end - scale) / z for end in interval]
+        # The interval's ends are INTERVAL_Z deviations from the scale: one deviation is that share of the way.
+        ends = [scale + (end - scale) / INTERVAL_Z for end in interval]
         yield SCALE, tuple({**run_params, **{n: v for n, v in scaled(estimates, s).items() if torque_power(n)}}
                            for s in ends)
 
@@ -83,8 +82,9 @@ def calibration_spread(rec: Recording, run_params: dict, calibration: dict, corr
     """The calibration's variance of each estimate on REC: RUN_PARAMS is the set the estimate ran with
     (Ts and jsf_r_time included), CALIBRATION the per-parameter entries (estimate, lo, hi) with their
     CORRELATION, ESTIMATES the values before the joint's torque SCALE, INTERVAL the scale's (None: a torque
-    sensor set it); PLACE(set) places the encoder zero on REC for a set. The smoother's is taken as the filter's: a parameter moves both estimates alike, and the
-    smoother's records would cost a kilobyte a sample for each run."""
+    sensor set it); PLACE(set) places the encoder zero on REC for a set. The smoother's is taken as the
+    filter's: a parameter moves both estimates alike, and the smoother's records would cost a kilobyte a
+    sample for each run."""
     variance = {std: np.zeros(len(rec.time)) for std in DEVIATIONS.values()}
     share = {PARAMETERS: np.zeros(len(rec.time)), SCALE: np.zeros(len(rec.time))}
     for which, ends in _sets(run_params, calibration, correlation, estimates, scale, interval):
@@ -100,19 +100,22 @@ def calibration_spread(rec: Recording, run_params: dict, calibration: dict, corr
 
 
 def _filtered(rec: Recording, params: dict) -> dict[str, np.ndarray]:
-    """tau_ukf and tau_hat of the batch estimator on REC, a block at a time (memory: two columns, however
-    long the recording); each row steps to the next one's time, the last by Ts, as `hdjoint estimate` steps."""
-    from hdjoint import _core
-    n = len(rec.time)
-    out = {name: np.empty(n) for name in ("tau_ukf", "tau_hat")}
-    stream = _core.EstimatorStream(parameters.for_estimator(params), float(rec.time[0]), False)
-    for first in range(0, n, CHUNK_ROWS):
-        rows = slice(first, min(first + CHUNK_ROWS, n))
-        end = float(rec.time[rows.stop]) if rows.stop < n else float(rec.time[-1] + params["Ts"])
-        block = stream.run(*(np.ascontiguousarray(c[rows]) for c in (rec.time, rec.i_m, rec.theta_m, rec.theta_l)),
-                           end)
+    """tau_ukf and tau_hat of the batch engine on REC, fed a block at a time as `hdjoint estimate` feeds it
+    (memory: two columns, however long the recording)."""
+    out = {name: np.empty(len(rec.time)) for name in ("tau_ukf", "tau_hat")}
+    done = 0
+
+    def keep(time, outputs) -> None:
+        nonlocal done
         for name, column in out.items():
-            column[rows] = block[name]
+            column[done:done + len(time)] = outputs[name]
+        done += len(time)
+
+    feeder = RowFeeder(CoreEngine(parameters.for_estimator(params), rec.path), params["Ts"], keep)
+    inputs = np.column_stack([getattr(rec, name) for name in INPUTS])
+    for first in range(0, len(rec.time), CHUNK_ROWS):
+        feeder.feed(rec.time[first:first + CHUNK_ROWS], inputs[first:first + CHUNK_ROWS])
+    feeder.end_segment()
     return out
 
 
