@@ -297,9 +297,12 @@ def finding_document(result, f) -> dict:
 def calibration_correlation(result) -> dict:
     """The calibrated parameters' posterior correlations from the fit that gave their intervals ({name:
     {other: r}}, rounded; a pair that fit did not estimate together is left out: independent)."""
-    names = set(result.calibration)
-    return {n: {m: round(r, 4) for m, r in row.items() if m in names}
-            for n, row in result.last_fit.correlation.items() if n in names}
+    fit = result.last_fit
+    if fit.correlation is None:
+        return {}
+    names = [n for n in fit.names if n in result.calibration]
+    at = {n: fit.names.index(n) for n in names}
+    return {n: {m: round(float(fit.correlation[at[n], at[m]]), 4) for m in names if m != n} for n in names}
 
 
 def document(result) -> dict:

@@ -5,6 +5,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from hdjoint.diagnosis.calibration import Calibrated
 from hdjoint.diagnosis import normal as norm
 
@@ -29,8 +31,8 @@ class Fit:
     std: dict = field(default_factory=dict)
     std_laplace: dict = field(default_factory=dict)
     std_robust: dict = field(default_factory=dict)
-    # The fitted parameters' posterior correlation (the cluster-robust covariance's): {name: {other: r}}.
-    correlation: dict = field(default_factory=dict)
+    # The fitted parameters' posterior correlation matrix (the cluster-robust covariance's), in `names` order.
+    correlation: np.ndarray | None = None
 
 
 @dataclass

@@ -229,9 +229,8 @@ class Objective:
         cov = robust_covariance(sol.jac, sol.fun, blocks)
         robust = deviations(cov, scale)
         wider = {n: widened(n, s) for n, s in zip(names, np.maximum(laplace, robust))}
-        r = correlation(cov)  # scale-free: the same in the parameters' own units
         return Fit(fitted, list(names), float(sol.cost), wider, dict(zip(names, laplace)), dict(zip(names, robust)),
-                   {n: {m: float(r[i, j]) for j, m in enumerate(names) if j != i} for i, n in enumerate(names)})
+                   correlation(cov))  # scale-free: the same in the parameters' own units
 
     def anchors(self, part: str, stateful: bool = False) -> list[str]:
         """The calibrated parameters of `part`, refitted with every hypothesis
