@@ -53,3 +53,27 @@ def test_a_moved_parameter_stays_within_its_range():
 def test_a_correlation_matrix_is_read_off_a_covariance():
     cov = np.array([[4.0, 1.0, 0.0], [1.0, 1.0, 0.0], [0.0, 0.0, 0.0]])
     np.testing.assert_allclose(correlation(cov), [[1.0, 0.5, 0.0], [0.5, 1.0, 0.0], [0.0, 0.0, 1.0]])
+
+
+def test_the_deviations_are_widened_in_place_and_every_other_cell_kept(tmp_path):
+    from hdjoint.jobs.calibration_spread import CalibrationSpread, widen_deviations
+    path = tmp_path / "est.csv"
+    path.write_text("time,tau_hat,tau_hat_std,tau_smooth_std\n0.0,1.25,0.3,0.1\n0.001,1.5,0.4,0.2\n")
+    spread = CalibrationSpread({"tau_hat_std": np.array([0.16, 0.09]), "tau_smooth_std": np.array([0.0, 0.0]),
+                                "tau_ukf_std": np.array([1.0, 1.0])}, {})
+    widen_deviations(str(path), spread)
+    lines = path.read_text().splitlines()
+    assert lines[0] == "time,tau_hat,tau_hat_std,tau_smooth_std"  # a deviation the file lacks is not added
+    assert [line.split(",")[:2] for line in lines[1:]] == [["0.0", "1.25"], ["0.001", "1.5"]]
+    np.testing.assert_allclose([float(line.split(",")[2]) for line in lines[1:]], [0.5, 0.5])  # 0.3^2 + 0.16, 0.4^2 + 0.09
+    np.testing.assert_allclose([float(line.split(",")[3]) for line in lines[1:]], [0.1, 0.2])
+
+
+def test_a_file_of_other_length_is_refused_and_left_as_it_was(tmp_path):
+    from hdjoint.jobs.calibration_spread import CalibrationSpread, widen_deviations
+    path = tmp_path / "est.csv"
+    text = "time,tau_hat_std\n0.0,0.3\n0.001,0.4\n0.002,0.5\n"
+    path.write_text(text)
+    with pytest.raises(RuntimeError, match="est.csv: 3 rows for 2 samples"):
+        widen_deviations(str(path), CalibrationSpread({"tau_hat_std": np.zeros(2)}, {}))
+    assert path.read_text() == text and [p.name for p in tmp_path.iterdir()] == ["est.csv"]

@@ -123,19 +123,23 @@ def widen_deviations(path: str, spread: CalibrationSpread) -> None:
     """Rewrite the estimates CSV at PATH (a staged file, replaced in one step) with each deviation column
     the root sum of squares of the filter's own and the calibration's; every other cell kept as written."""
     widened = path + ".widened"
-    with open(path, newline="", encoding="utf-8") as src, open(widened, "w", newline="", encoding="utf-8") as dst:
-        reader, writer = csv.reader(src), csv.writer(dst, lineterminator="\n")
-        header = next(reader)
-        writer.writerow(header)
-        columns = {header.index(c): v for c, v in spread.variance.items() if c in header}
-        samples = len(next(iter(spread.variance.values())))
-        rows = 0
-        for row in reader:
-            if rows < samples:
-                for column, variance in columns.items():
-                    row[column] = repr(float(np.sqrt(float(row[column]) ** 2 + variance[rows])))
-            writer.writerow(row)
-            rows += 1
-    if rows != samples:
-        raise RuntimeError(f"{path}: {rows} rows for {samples} samples")
-    os.replace(widened, path)
+    try:
+        with open(path, newline="", encoding="utf-8") as src, open(widened, "w", newline="", encoding="utf-8") as dst:
+            reader, writer = csv.reader(src), csv.writer(dst, lineterminator="\n")
+            header = next(reader)
+            writer.writerow(header)
+            columns = {header.index(c): v for c, v in spread.variance.items() if c in header}
+            samples = len(next(iter(spread.variance.values())))
+            rows = 0
+            for row in reader:
+                if rows < samples:
+                    for column, variance in columns.items():
+                        row[column] = repr(float(np.sqrt(float(row[column]) ** 2 + variance[rows])))
+                writer.writerow(row)
+                rows += 1
+        if rows != samples:
+            raise RuntimeError(f"{path}: {rows} rows for {samples} samples")
+        os.replace(widened, path)
+    finally:
+        if os.path.exists(widened):  # not replaced: nothing half-done is left
+            os.unlink(widened)
