@@ -143,7 +143,8 @@ def _calibrated_and_exact(name, seed, tmp_path, capsys):
     assert code == 0, err
     assert run_cli(capsys, *estimate, tmp_path / "exact.csv", "--params", tmp_path / "exact.json")[0] == 0
     truth, span = run_rec.extra["tau_joint"], float(np.ptp(run_rec.extra["tau_joint"]))
-    calibrated, exact = (bench._share(tmp_path / f"{s}.csv", truth, span) for s in ("calibrated", "exact"))
+    calibrated, exact = (bench._share(bench._estimates(tmp_path / f"{s}.csv", truth), truth, span)
+                         for s in ("calibrated", "exact"))
     return calibrated, exact, json.loads((tmp_path / "calibrated.calibration.json").read_text())["parameters"]
 
 
