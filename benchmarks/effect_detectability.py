@@ -27,9 +27,9 @@ from pathlib import Path
 
 from threadpoolctl import threadpool_limits
 
-from hdjoint.diagnosis.calibrate import calibrate
-from hdjoint.diagnosis.prepare import prepare
-from hdjoint.diagnosis.search import HypothesisSearch
+from hdjoint.diagnosis.fit.nominal_calibration import calibrate
+from hdjoint.diagnosis.model.prepare import prepare
+from hdjoint.diagnosis.search.hypothesis_search import HypothesisSearch
 from hdjoint.diagnosis.effects import EFFECTS
 from hdjoint.diagnosis.effects.hysteresis import dahl_matching_bouc_wen
 from hdjoint.io.recording import read_recording, write_recording

@@ -14,7 +14,7 @@ friction is LuGre.
 The raw intervals (Laplace, sandwich) are too narrow where the truth's
 form differs (bias, not noise): --fit-factors A-B sets each parameter's
 model-form factor, the 95th percentile of abs(error) / std over seeds A-B
-divided by 1.96 (at least 1), and writes python/hdjoint/diagnosis/model_form_factors.json,
+divided by 1.96 (at least 1), and writes python/hdjoint/diagnosis/fit/model_form_factors.json,
 which the diagnosis then multiplies its intervals by; the coverage that
 counts is the one on the other seeds.
 
@@ -35,15 +35,15 @@ from results import RESULTS_DIR, ResultsPage
 from threadpoolctl import threadpool_limits
 
 import stamp
-from hdjoint.diagnosis.calibrate import calibrate as calibrate_stage
-from hdjoint.diagnosis.prepare import prepare
+from hdjoint.diagnosis.fit.nominal_calibration import calibrate as calibrate_stage
+from hdjoint.diagnosis.model.prepare import prepare
 from hdjoint_truth.cases import CONTROL_CASES, draw, record
 
 Z95 = 1.959964
 UNDEFINED = ("a0", "wg_load")
 RAW = RESULTS_DIR / "interval_coverage.jsonl"
 # The source tree's copy (the installed package reads the one the wheel carries).
-FACTORS = Path(__file__).resolve().parents[1] / "python" / "hdjoint" / "diagnosis" / "model_form_factors.json"
+FACTORS = Path(__file__).resolve().parents[1] / "python" / "hdjoint" / "diagnosis" / "fit" / "model_form_factors.json"
 
 
 def true_value(name: str, joint) -> float | None:

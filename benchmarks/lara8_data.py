@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import stamp
-from hdjoint.diagnosis.kinematics import kinematics
+from hdjoint.diagnosis.model.kinematics import kinematics
 from hdjoint.io import parameters
 from hdjoint.io.recording import read_recording
 from scipy.optimize import minimize_scalar

@@ -41,8 +41,8 @@ from lara8_data import DATA, JOINTS, K1, KT, TOOTH_RATIO, generated_by, halves, 
 from lara8_torsion import regress  # noqa: E402
 
 from hdjoint.io import parameters  # noqa: E402
-from hdjoint.diagnosis import torsion_orders
-from hdjoint.diagnosis.kinematics import folds  # noqa: E402
+from hdjoint.diagnosis.search.hypothesis_search import torsion_orders
+from hdjoint.diagnosis.model.kinematics import folds  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 TABLE = ROOT / "docs" / "results" / "lara8_kinematic.md"

@@ -30,9 +30,9 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import lara8_kinematic
 from hdjoint.diagnosis.effects import KINEMATIC_EQ7
-from hdjoint.diagnosis.kinematics import kinematics
-from hdjoint.diagnosis.part_torques import Prepared
-from hdjoint.diagnosis.validation import validate
+from hdjoint.diagnosis.model.kinematics import kinematics
+from hdjoint.diagnosis.model.torque_estimates import Prepared
+from hdjoint.diagnosis.verdict.validation import validate
 from hdjoint.io import parameters
 from hdjoint.io.recording import write_recording
 from hdjoint.jobs.diagnose import diagnose_to_directory
@@ -285,7 +285,7 @@ def write_table(rows: list[dict], path: Path = TABLE) -> str:
                             [_verdict_row(r) for r in rows])
     labels = list(rows[0]["yardstick"]) if rows else []
     lines += ["", "## The verdict's yardstick: what each set misses", "",
-              ("Each channel's held-out residual beyond its sensors' floor at the corrected set (diagnosis/floors.py), "
+              ("Each channel's held-out residual beyond its sensors' floor at the corrected set (diagnosis/verdict/floors.py), "
               "in N.m and as a share of the torque span; more than the default accuracy (5 %) is `unexplained`, "
               "more than 10 % never `consistent`."), ""]
     lines += markdown_table(["recording", "torque span (N.m)", *labels],

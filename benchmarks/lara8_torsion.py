@@ -32,8 +32,8 @@ from lara8_data import CURRENT_SIGN, DATA, K1, KT, TOOTH_RATIO, gear_ratio, gene
 
 from hdjoint.io import parameters  # noqa: E402
 from hdjoint.io.recording import read_recording  # noqa: E402
-from hdjoint.diagnosis.kinematics import kinematics  # noqa: E402
-from hdjoint.diagnosis.torsion_orders import correlation_length  # noqa: E402
+from hdjoint.diagnosis.model.kinematics import kinematics  # noqa: E402
+from hdjoint.diagnosis.search.torsion_orders import correlation_length  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 TABLE = ROOT / "docs" / "results" / "lara8_torsion.md"

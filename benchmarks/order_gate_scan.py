@@ -20,9 +20,9 @@ import time
 
 from threadpoolctl import threadpool_limits
 
-from hdjoint.diagnosis.calibrate import calibrate
-from hdjoint.diagnosis.prepare import prepare
-from hdjoint.diagnosis.search import HypothesisSearch
+from hdjoint.diagnosis.fit.nominal_calibration import calibrate
+from hdjoint.diagnosis.model.prepare import prepare
+from hdjoint.diagnosis.search.hypothesis_search import HypothesisSearch
 from hdjoint.diagnosis.rules import DOMINANT_GAIN
 from hdjoint_truth.cases import CONTROL_CASES, EFFECT_CASES, draw, record
 

@@ -16,9 +16,9 @@ import time
 
 from threadpoolctl import threadpool_limits
 
-from hdjoint.diagnosis.calibrate import calibrate, calibration_table
-from hdjoint.diagnosis.objective import Objective
-from hdjoint.diagnosis.prepare import prepare
+from hdjoint.diagnosis.fit.nominal_calibration import calibrate, calibration_table
+from hdjoint.diagnosis.fit.objective import Objective
+from hdjoint.diagnosis.model.prepare import prepare
 from hdjoint_truth import cases as tc
 from hdjoint_truth.simulate import simulate
 from results import ResultsPage

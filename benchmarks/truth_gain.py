@@ -16,11 +16,11 @@ import dataclasses
 
 import numpy as np
 
-from hdjoint.diagnosis.calibrate import calibrate, calibration_table
-from hdjoint.diagnosis.prepare import prepare
-from hdjoint.diagnosis.search import HypothesisSearch
+from hdjoint.diagnosis.fit.nominal_calibration import calibrate, calibration_table
+from hdjoint.diagnosis.model.prepare import prepare
+from hdjoint.diagnosis.search.hypothesis_search import HypothesisSearch
 from hdjoint.diagnosis.effects import EFFECTS
-from hdjoint.diagnosis.structure import held_out_gain_sq
+from hdjoint.diagnosis.model.structure import held_out_gain_sq
 from hdjoint_truth import cases as tc
 
 

@@ -1,4 +1,4 @@
-"""False alarms of the verdict's absolute yardstick (diagnosis/floors.py) and
+"""False alarms of the verdict's absolute yardstick (diagnosis/verdict/floors.py) and
 of the released priors (resize.released) on the independent truth's
 controls, with and without a torque sensor: each channel's held-out
 residual, its sensors' floor, and the miss beyond the floor as a share of
@@ -22,11 +22,11 @@ from dataclasses import replace
 
 from threadpoolctl import threadpool_limits
 
-from hdjoint.diagnosis.calibrate import calibrate, calibration_table
-from hdjoint.diagnosis.floors import accuracy
-from hdjoint.diagnosis.prepare import prepare
-from hdjoint.diagnosis.resize import released
-from hdjoint.diagnosis.select import Selection
+from hdjoint.diagnosis.fit.nominal_calibration import calibrate, calibration_table
+from hdjoint.diagnosis.verdict.floors import accuracy
+from hdjoint.diagnosis.model.prepare import prepare
+from hdjoint.diagnosis.verdict.resize import released
+from hdjoint.diagnosis.search.selection import Selection
 from hdjoint.diagnosis.rules import ACCURACY_SHARE, MAX_MISS_SHARE
 from hdjoint_truth.cases import CONTROL_CASES, draw, record
 

@@ -11,7 +11,7 @@ import math
 
 import pytest
 
-from hdjoint.diagnosis.detection_limit import smallest_shown
+from hdjoint.diagnosis.verdict.detection_limit import smallest_shown
 from hdjoint.diagnosis.pipeline import diagnose
 from hdjoint.diagnosis.effects import EFFECTS
 from hdjoint_truth.cases import CONTROL_CASES, EFFECT_CASES, draw, record

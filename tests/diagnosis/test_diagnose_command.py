@@ -10,7 +10,7 @@ import pytest
 from hdjoint.app import cli
 from hdjoint.io import parameters
 from hdjoint.fmu.concealed_effects import CASES, nominal_for, record
-from hdjoint.diagnosis.prepare import DiagnosisError
+from hdjoint.diagnosis.model.prepare import DiagnosisError
 from hdjoint.diagnosis.pipeline import diagnose
 from hdjoint.fmu.runner import run_estimator_fmu
 from hdjoint.io.recording import write_recording

@@ -149,7 +149,7 @@ def test_the_report_never_shows_minus_zero(clean):
 
 
 def test_what_to_record_next_names_each_reason_once():
-    from hdjoint.diagnosis.report import _summary
+    from hdjoint.diagnosis.output.report import _summary
     reason = "not testable on this recording: the motor reverses fewer than twice"
     doc = {"verdict": "consistent", "findings": [], "beyond_tolerance": [], "calibration": {}, "unexplained": [],
            "cannot_tell": [], "not_testable": [{"effect": e, "reason": reason}
@@ -171,7 +171,7 @@ def test_the_nominal_curve_shows_beneath_an_equal_corrected_one(figure):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from hdjoint.diagnosis import plots
+    from hdjoint.diagnosis.output import plots
     x = np.linspace(0.0, 10.0, 500)
     y = np.sin(3 * x)
     fig, ax = plt.subplots()
@@ -191,7 +191,7 @@ def test_a_residual_the_findings_leave_unchanged_is_drawn_visibly_and_said_so():
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from hdjoint.diagnosis import plots
+    from hdjoint.diagnosis.output import plots
     t = np.linspace(0.0, 10.0, 2000)
     y = np.random.default_rng(0).standard_normal(t.size)
     fig, ax = plt.subplots()

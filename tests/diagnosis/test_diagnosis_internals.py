@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from hdjoint.fmu.concealed_effects import CASES, nominal_for, record
-from hdjoint.diagnosis.prepare import prepare
+from hdjoint.diagnosis.model.prepare import prepare
 
 
 @pytest.fixture(scope="module")
@@ -33,7 +33,7 @@ def test_estimates_depend_on_no_parameter_outside_their_cache_key(diag, part):
     """The evaluator reuses an estimate while the parameters in depends_on(part)
     are unchanged: no other parameter may change it, or the cache goes stale."""
     from hdjoint.io import parameters
-    from hdjoint.diagnosis.part_torques import ESTIMATES, depends_on
+    from hdjoint.diagnosis.model.torque_estimates import ESTIMATES, depends_on
     base = ESTIMATES[part](diag.prep, diag.nominal)
     for name, info in parameters.table().items():
         if name in depends_on(part):
@@ -50,7 +50,7 @@ def test_the_loop_free_torque_and_drive_depend_on_nothing_outside_their_cache_ke
     the parameters the compliance model reads (but the loop's) are unchanged:
     no other parameter may change them (each value computed afresh here)."""
     from hdjoint.io import parameters
-    from hdjoint.diagnosis.part_torques import LOOP_PARAMETERS, Recent, _compliance_reads, _loop_free
+    from hdjoint.diagnosis.model.torque_estimates import LOOP_PARAMETERS, Recent, _compliance_reads, _loop_free
 
     def fresh(p):
         diag.prep._loop_free = Recent()
@@ -70,7 +70,7 @@ def test_every_effect_of_the_library_has_its_parameters_in_the_model():
     build every effect must be testable, so a typo cannot drop one silently."""
     from hdjoint.io import parameters
     from hdjoint.diagnosis.effects import EFFECTS
-    from hdjoint.diagnosis.part_torques import KINEMATIC_EXTRA
+    from hdjoint.diagnosis.model.torque_estimates import KINEMATIC_EXTRA
     table = parameters.table()
     for effect in EFFECTS.values():
         for name in effect.params:
@@ -88,7 +88,7 @@ def test_the_transmission_estimate_does_not_lag_by_the_current_delay(diag):
     estimator's delay line did: a 2 ms delay put its lag into the transmission
     channel, and Kf, Cf and eq. (7) absorbed it). With the wave generator
     loaded by tau/N the current does not enter tau_T at all."""
-    from hdjoint.diagnosis.part_torques import tau_transmission
+    from hdjoint.diagnosis.model.torque_estimates import tau_transmission
     p = dict(diag.nominal, wg_load=1.0)
     np.testing.assert_array_equal(tau_transmission(diag.prep, dict(p, i_delay=2e-3)), tau_transmission(diag.prep, p))
     # With the motor current loading it, the current is the one realigned with the encoders.
@@ -101,7 +101,7 @@ def test_the_torsion_rate_is_reused_across_non_geometric_parameters_and_stays_ex
     """The damping's torsion rate depends on the geometry (N, eq. (7), its
     extra orders) alone: it is recomputed only when that changes, and the
     reused rate is the one the whole parameter set gives."""
-    from hdjoint.diagnosis import part_torques as channels
+    from hdjoint.diagnosis.model import torque_estimates as channels
     from hdjoint.io import parameters
     p = dict(diag.nominal, Df=4.0)
     first = channels.torsion_rate(diag.prep, p)

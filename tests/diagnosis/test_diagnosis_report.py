@@ -129,7 +129,7 @@ def test_a_finding_is_printed_once(report_dir):
 def test_a_resized_parameter_is_given_with_its_unit_and_meaning():
     """A resized finding read 'wg_load 0.9973 [0.9895, 1.005] (nominal ...)': a raw name, no unit,
     no meaning (an added one had them). Both now say what the parameter is, from the parameter table."""
-    from hdjoint.diagnosis.report import _finding_line
+    from hdjoint.diagnosis.output.report import _finding_line
     from hdjoint.io.parameters import table
     entry = {"estimate": 0.9973, "lo": 0.9895, "hi": 1.005, "nominal": 0.5, "tolerance": 0.25}
     line = _finding_line({"kind": "resized", "effect": "wave_generator_load", "p_value": 1e-3, "resized": True,
@@ -142,8 +142,8 @@ def test_a_resized_parameter_is_given_with_its_unit_and_meaning():
 def test_the_figures_started_when_the_corrected_set_is_settled_are_the_finished_diagnosis_ones():
     """`hdjoint diagnose` starts drawing before the detection limits and the
     findings document: from what the pipeline hands over then, the same figures."""
-    from hdjoint.diagnosis import report
-    from hdjoint.diagnosis.findings import where
+    from hdjoint.diagnosis.output import report
+    from hdjoint.diagnosis.verdict.findings import where
     from hdjoint.diagnosis.pipeline import diagnose
     case = next(c for c in CASES if c.present == ("backlash",))
     settled = []

@@ -7,9 +7,9 @@ few folds is not a finding, however large."""
 import numpy as np
 
 from hdjoint.diagnosis.effects import EFFECTS
-from hdjoint.diagnosis.hypotheses import Hypothesis
+from hdjoint.diagnosis.search.hypotheses import Hypothesis
 from hdjoint.diagnosis.rules import MIN_GAIN, STEADY_FOLD_SHARE
-from hdjoint.diagnosis.structure import held_out_gain_sq
+from hdjoint.diagnosis.model.structure import held_out_gain_sq
 
 FOLDS, PER_FOLD = 40, 50
 fold = np.repeat(np.arange(FOLDS), PER_FOLD)

@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hdjoint.diagnosis.part_torques import Prepared, hysteresis_torque, tau_transmission
-from hdjoint.diagnosis.kinematics import kinematics
+from hdjoint.diagnosis.model.torque_estimates import Prepared, hysteresis_torque, tau_transmission
+from hdjoint.diagnosis.model.kinematics import kinematics
 from hdjoint_truth.cases import EFFECT_CASES, draw, record
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))

@@ -10,7 +10,7 @@ import pytest
 
 from hdjoint.fmu.concealed_effects import CASES, nominal_for, record, truth_for
 from hdjoint.diagnosis.pipeline import diagnose
-from hdjoint.diagnosis.validation import validate
+from hdjoint.diagnosis.verdict.validation import validate
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 import lara8_table  # noqa: E402  (the LARA8 conventions: tooth ratio, current sign, nominal set)
@@ -129,8 +129,8 @@ def test_a_ripple_over_few_revolutions_stands_out_of_its_off_orders():
     sinc(d R) of a ripple at order k: on LARA8 joint1_jog (2.6 revolutions)
     the quarter-order off-orders sat inside the order's own lobe, so a pure
     ripple read as broadband (prominence about 1, 3 needed)."""
-    from hdjoint.diagnosis.kinematics import folds
-    from hdjoint.diagnosis.structure import order_search
+    from hdjoint.diagnosis.model.kinematics import folds
+    from hdjoint.diagnosis.model.structure import order_search
     n = 1250
     theta_m = np.linspace(0.0, 2.6 * 2 * np.pi, n)
     residual = np.cos(3.0 * theta_m + 0.3) + 0.3 * np.random.default_rng(0).standard_normal(n)

@@ -4,13 +4,13 @@ across the jump to the next), and are the diagnosis' folds."""
 import numpy as np
 import pytest
 
-from hdjoint.diagnosis import prepare as preparing
+from hdjoint.diagnosis.model import prepare as preparing
 from hdjoint.diagnosis.pipeline import diagnose
 from hdjoint.diagnosis.rules import FOLDS
 from hdjoint.io import parameters
 from hdjoint.fmu.concealed_effects import CASES, nominal_for, record
-from hdjoint.diagnosis.part_torques import Prepared, tau_transmission
-from hdjoint.diagnosis.kinematics import kinematics, sample_windows, window_labels
+from hdjoint.diagnosis.model.torque_estimates import Prepared, tau_transmission
+from hdjoint.diagnosis.model.kinematics import kinematics, sample_windows, window_labels
 
 pytestmark = pytest.mark.slow  # a long recording diagnosed in windows
 

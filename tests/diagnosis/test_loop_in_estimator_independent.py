@@ -8,7 +8,7 @@ FMU loses."""
 import pytest
 
 from hdjoint.diagnosis.pipeline import diagnose
-from hdjoint.diagnosis.report import build
+from hdjoint.diagnosis.output.report import build
 from hdjoint_truth.cases import EFFECT_CASES, draw, record
 
 pytestmark = pytest.mark.slow

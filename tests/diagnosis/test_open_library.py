@@ -4,10 +4,10 @@ positive held-out gain, and proposes nothing on a joint that matches its model."
 import pytest
 
 from hdjoint.io import parameters
-from hdjoint.diagnosis.current_alignment import align_current
-from hdjoint.diagnosis.objective import Objective
-from hdjoint.diagnosis.prepare import prepare
-from hdjoint.diagnosis.open_library import propose_terms
+from hdjoint.diagnosis.model.current_alignment import align_current
+from hdjoint.diagnosis.fit.objective import Objective
+from hdjoint.diagnosis.model.prepare import prepare
+from hdjoint.diagnosis.verdict.open_library import propose_terms
 from hdjoint_truth.physics import Form
 from hdjoint_truth.simulate import Setup, simulate
 

@@ -4,10 +4,10 @@ between repeats) is reported as such; the report still renders, the other
 sections whole (it raised KeyError and wrote nothing)."""
 import pytest
 
-from hdjoint.diagnosis import report
+from hdjoint.diagnosis.output import report
 from hdjoint.fmu.concealed_effects import CASES, nominal_for, record
 from hdjoint.diagnosis.pipeline import diagnose
-from hdjoint.diagnosis.findings import estimator_comparison
+from hdjoint.diagnosis.verdict.findings import estimator_comparison
 
 pytestmark = pytest.mark.slow
 

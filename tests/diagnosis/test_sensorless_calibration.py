@@ -15,10 +15,10 @@ import numpy as np
 import pytest
 from threadpoolctl import threadpool_limits
 
-from hdjoint.diagnosis.channels import CURRENT_OFFSET_SHARE, channels_for
-from hdjoint.diagnosis.calibrate import calibrate
-from hdjoint.diagnosis.objective import Objective
-from hdjoint.diagnosis.prepare import prepare
+from hdjoint.diagnosis.model.residual_channels import CURRENT_OFFSET_SHARE, channels_for
+from hdjoint.diagnosis.fit.nominal_calibration import calibrate
+from hdjoint.diagnosis.fit.objective import Objective
+from hdjoint.diagnosis.model.prepare import prepare
 from hdjoint_truth.cases import CONTROL_CASES, draw, record
 
 pytestmark = pytest.mark.slow
@@ -69,7 +69,7 @@ def test_a_current_offset_stays_in_the_motor_channel():
     up to what a current sensor's offset can give (channels.mean_allowance):
     the structure is gone, and 0.01 A more of offset moves no parameter the
     link side sees."""
-    from hdjoint.diagnosis.findings import remaining_structure
+    from hdjoint.diagnosis.verdict.findings import remaining_structure
     joint = draw(next(c for c in CONTROL_CASES if c.name == "control on constant_speeds"), 1, 30.0)
     rec = replace(record(joint, 0), tau_sensor=None)
     shifted = replace(rec, i_m=rec.i_m + 0.01)

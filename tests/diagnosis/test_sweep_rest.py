@@ -4,12 +4,12 @@ not compare it."""
 import numpy as np
 import pytest
 
-from hdjoint.diagnosis.calibrate import calibrate
-from hdjoint.diagnosis.prepare import prepare
-from hdjoint.diagnosis.search import HypothesisSearch
-from hdjoint.diagnosis.motor_rest import motor_at_rest
+from hdjoint.diagnosis.fit.nominal_calibration import calibrate
+from hdjoint.diagnosis.model.prepare import prepare
+from hdjoint.diagnosis.search.hypothesis_search import HypothesisSearch
+from hdjoint.diagnosis.model.motor_rest import motor_at_rest
 from hdjoint.io.recording import Recording
-from hdjoint.diagnosis.kinematics import kinematics
+from hdjoint.diagnosis.model.kinematics import kinematics
 from hdjoint_truth.cases import CONTROL_CASES, draw, record
 from hdjoint_truth.excitations import multisine, paper, sweep
 

@@ -15,10 +15,10 @@ from dataclasses import replace
 import pytest
 from threadpoolctl import threadpool_limits
 
-from hdjoint.diagnosis.channels import TORSION_VIEW
-from hdjoint.diagnosis.calibrate import calibrate
-from hdjoint.diagnosis.prepare import prepare
-from hdjoint.diagnosis.search import HypothesisSearch
+from hdjoint.diagnosis.model.residual_channels import TORSION_VIEW
+from hdjoint.diagnosis.fit.nominal_calibration import calibrate
+from hdjoint.diagnosis.model.prepare import prepare
+from hdjoint.diagnosis.search.hypothesis_search import HypothesisSearch
 from hdjoint.diagnosis.effects import EFFECTS
 from hdjoint_truth.cases import EFFECT_CASES, draw, record
 

@@ -6,12 +6,12 @@ from pathlib import Path
 
 import numpy as np
 
-from hdjoint.diagnosis.part_torques import Prepared
-from hdjoint.diagnosis.channels import Evaluator, channels_for
-from hdjoint.diagnosis.prepare import place_offset
-from hdjoint.diagnosis.kinematics import kinematics
+from hdjoint.diagnosis.model.torque_estimates import Prepared
+from hdjoint.diagnosis.model.residual_channels import Evaluator, channels_for
+from hdjoint.diagnosis.model.prepare import place_offset
+from hdjoint.diagnosis.model.kinematics import kinematics
 from hdjoint_truth.cases import CONTROL_CASES, draw, record
-from hdjoint.diagnosis.validation import summary_line, validate
+from hdjoint.diagnosis.verdict.validation import summary_line, validate
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 import lara8_table  # noqa: E402  (the LARA8 conventions: tooth ratio, current sign, nominal set)

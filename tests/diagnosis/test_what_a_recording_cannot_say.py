@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from hdjoint.diagnosis import effects
-from hdjoint.diagnosis.objective import Objective
-from hdjoint.diagnosis.prepare import prepare
+from hdjoint.diagnosis.fit.objective import Objective
+from hdjoint.diagnosis.model.prepare import prepare
 from hdjoint.diagnosis.effects import EFFECTS
 from hdjoint.diagnosis.effects.needs import FREQUENCY_FOLLOWS_TIME, frequency_time_correlation
 from hdjoint_truth.cases import CONTROL_CASES, draw, record

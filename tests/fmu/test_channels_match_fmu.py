@@ -1,4 +1,4 @@
-"""The diagnosis's motor and link torque channels (hdjoint.diagnosis.part_torques) are the
+"""The diagnosis's motor and link torque channels (hdjoint.diagnosis.model.torque_estimates) are the
 joint's own physics: run on the joint's true motion, with every effect of the
 motor and link equations on, they give the joint's transmitted torque.
 
@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 from hdjoint import _core
-from hdjoint.diagnosis import part_torques as channels
+from hdjoint.diagnosis.model import torque_estimates as channels
 from hdjoint.io import parameters
 from hdjoint.io.recording import Recording
-from hdjoint.diagnosis.kinematics import Kinematics
+from hdjoint.diagnosis.model.kinematics import Kinematics
 
 DT = 1e-4
 EFFECTS = {  # every effect of the motor and link equations (LuGre and warm-up replace the drift law: off)

@@ -7,9 +7,9 @@ every ripple 0, and cogging on that sweep was never tested."""
 import numpy as np
 import pytest
 
-from hdjoint.diagnosis.significance import null_z
-from hdjoint.diagnosis.kinematics import folds
-from hdjoint.diagnosis.structure import fold_z, held_out_gain_sq, order_search
+from hdjoint.diagnosis.search.significance import null_z
+from hdjoint.diagnosis.model.kinematics import folds
+from hdjoint.diagnosis.model.structure import fold_z, held_out_gain_sq, order_search
 
 N, FOLDS = 8000, 40
 SMOOTHING = 8.0  # samples

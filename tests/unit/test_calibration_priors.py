@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from hdjoint.io import parameters
-from hdjoint.diagnosis.calibration import Calibrated, Prior, priors
+from hdjoint.diagnosis.fit.priors import Calibrated, Prior, priors
 from hdjoint.diagnosis.effects import calibrated_parameters
-from hdjoint.diagnosis.significance import NullNoise, benjamini_hochberg, null_z
-from hdjoint.diagnosis.kinematics import folds
+from hdjoint.diagnosis.search.significance import NullNoise, benjamini_hochberg, null_z
+from hdjoint.diagnosis.model.kinematics import folds
 
 
 def test_the_table_carries_cited_tolerances():
@@ -93,8 +93,8 @@ def test_the_simulated_null_of_a_structureless_regressor_is_centred_below_signif
 
 def test_a_binned_structure_is_significant_against_the_simulated_null_and_noise_is_not():
     """The unexplained-structure scans' test (findings.remaining_structure): bins as regressors."""
-    from hdjoint.diagnosis.significance import p_value
-    from hdjoint.diagnosis.structure import bins_of, held_out_gain
+    from hdjoint.diagnosis.search.significance import p_value
+    from hdjoint.diagnosis.model.structure import bins_of, held_out_gain
     rng = np.random.default_rng(8)
     n = 8000
     fold = folds(n, 40)
@@ -114,7 +114,7 @@ def test_a_binned_structure_is_significant_against_the_simulated_null_and_noise_
 
 
 def test_the_vectorised_null_statistic_is_the_held_out_gain_z_of_each_replicate():
-    from hdjoint.diagnosis.structure import held_out_gain_sq
+    from hdjoint.diagnosis.model.structure import held_out_gain_sq
     rng = np.random.default_rng(1)
     n = 6000
     fold = folds(n, 40)

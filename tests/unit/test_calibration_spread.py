@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
-from hdjoint.diagnosis.calibration import correlation
+from hdjoint.diagnosis.fit.priors import correlation
 from hdjoint.diagnosis.rules import INTERVAL
 from hdjoint.jobs.calibration_spread import PARAMETERS, _sets, principal_axes
 

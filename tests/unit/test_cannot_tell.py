@@ -4,9 +4,9 @@ support that the folds do not agree on, and constants of the joint that
 calibration moved far beyond their tolerance."""
 from types import SimpleNamespace
 
-from hdjoint.diagnosis.calibration import Calibrated, Prior
-from hdjoint.diagnosis.cannot_tell import cannot_tell
-from hdjoint.diagnosis.detection_limit import Limit
+from hdjoint.diagnosis.fit.priors import Calibrated, Prior
+from hdjoint.diagnosis.verdict.cannot_tell import cannot_tell
+from hdjoint.diagnosis.verdict.detection_limit import Limit
 
 
 def _tested(effect, gain, z, dbic, accepted=False, p=0.5):

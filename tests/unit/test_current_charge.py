@@ -6,9 +6,9 @@ sweeps, and an aliased alternation would read as a current delay."""
 import numpy as np
 import pytest
 
-from hdjoint.diagnosis.part_torques import Prepared, _smoothed_current
+from hdjoint.diagnosis.model.torque_estimates import Prepared, _smoothed_current
 from hdjoint.io.recording import Recording
-from hdjoint.diagnosis.kinematics import kinematics
+from hdjoint.diagnosis.model.kinematics import kinematics
 
 TS, SUBSTEP = 1e-3, 1.25e-4
 

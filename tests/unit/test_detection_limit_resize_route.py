@@ -5,8 +5,8 @@ closes that route, and the effect then gets no limit (detection_limit._moved).
 Which effects get a limit at all: detection_limit.untold_effects."""
 from types import SimpleNamespace
 
-from hdjoint.diagnosis.calibration import Prior
-from hdjoint.diagnosis.detection_limit import _moved, resized
+from hdjoint.diagnosis.fit.priors import Prior
+from hdjoint.diagnosis.verdict.detection_limit import _moved, resized
 from hdjoint.diagnosis.effects import EFFECTS
 
 KINEMATIC = EFFECTS["kinematic_error"]
@@ -28,7 +28,7 @@ def test_only_the_effects_own_terms_count_and_a_term_already_beyond_closes_the_r
 
 
 def test_which_effects_get_a_limit():
-    from hdjoint.diagnosis.detection_limit import untold_effects
+    from hdjoint.diagnosis.verdict.detection_limit import untold_effects
     effects = [EFFECTS[e] for e in ("kinematic_error", "backlash", "time_delay", "cogging", "hysteresis")]
     within = {"al1": 1e-4, "ke_l1_a": 0.0, "ke_l1_b": 0.0}
 

@@ -4,7 +4,7 @@ the speed is held in its range, not by gain where the speed passes through zero.
 import numpy as np
 
 from hdjoint.diagnosis.effects.stribeck_friction import HELD_FOR, held_speed, steady_evidence
-from hdjoint.diagnosis.kinematics import Kinematics
+from hdjoint.diagnosis.model.kinematics import Kinematics
 
 STEP = 1e-3
 TIME = np.arange(0.0, 20.0, STEP)
@@ -60,7 +60,7 @@ def test_too_few_held_folds_cannot_separate():
 def _peak_over_fc(fitted: dict) -> float:
     """The fitted law's largest friction over speed (the C++ law), in units of Fc."""
     from hdjoint.io import parameters
-    from hdjoint.diagnosis.part_torques import motor_friction
+    from hdjoint.diagnosis.model.torque_estimates import motor_friction
     p = dict(parameters.defaults(), Bm=0.0, **fitted)
     speed = np.geomspace(1e-4, 50.0, 4000)
     return float(np.max(motor_friction(p, speed, 0.0 * speed)) / p["Fc"])

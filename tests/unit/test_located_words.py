@@ -3,8 +3,8 @@ the loading-vs-unloading scan codes loading samples as torque + 1e4 N.m, and
 an unexplained entry read "largest at 1e+04 to 1e+04 N.m" (issue 38)."""
 import numpy as np
 
-from hdjoint.diagnosis.findings import LOADING_CODE, _direction_bin, _loading_bin
-from hdjoint.diagnosis.structure import scan
+from hdjoint.diagnosis.verdict.findings import LOADING_CODE, _direction_bin, _loading_bin
+from hdjoint.diagnosis.model.structure import scan
 
 
 def test_the_loading_scan_says_torque_and_direction_not_its_code():

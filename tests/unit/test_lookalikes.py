@@ -3,11 +3,11 @@ fold, is reported as one ambiguous finding with both and the excitation
 that would separate them; a clearly better one is added alone."""
 import numpy as np
 
-from hdjoint.diagnosis.decide import finding_for
-from hdjoint.diagnosis.hypotheses import Hypothesis
+from hdjoint.diagnosis.search.decide import finding_for
+from hdjoint.diagnosis.search.hypotheses import Hypothesis
 from hdjoint.diagnosis.effects import EFFECTS
-from hdjoint.diagnosis.findings import separate_by
-from hdjoint.diagnosis.structure import HeldOutGain
+from hdjoint.diagnosis.verdict.findings import separate_by
+from hdjoint.diagnosis.model.structure import HeldOutGain
 
 
 def _hypothesis(effect_id, fold_gains, p_value=1e-4):

@@ -11,9 +11,9 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 import interval_coverage as coverage  # noqa: E402
 
-from hdjoint.diagnosis import calibration  # noqa: E402
+from hdjoint.diagnosis.fit import priors as calibration  # noqa: E402
 from hdjoint.io import parameters
-from hdjoint.diagnosis.calibration import Calibrated, Prior  # noqa: E402
+from hdjoint.diagnosis.fit.priors import Calibrated, Prior  # noqa: E402
 
 
 def _rows(name, errors, std):

@@ -153,3 +153,44 @@ def test_the_benchmarks_have_no_circles_and_share_no_private_names():
                 private.append(f"{name} reads {node.value.id}.{node.attr}")
     assert not private, private
     assert not circles(graph)
+
+
+# The diagnosis's stages, bottom to top; a stage imports its own and those below it, the
+# shared base (rules, normal, forked) and the effects. The effects are plug-ins: they may use
+# the model's signals (kinematics, structure), which in turn evaluate them.
+DIAGNOSIS = "hdjoint.diagnosis"
+STAGES = ("model", "fit", "search", "verdict", "output")
+DIAGNOSIS_BASE = ("rules", "normal", "forked")
+
+
+def _stage(module: str) -> int | None:
+    """A diagnosis module's rank: base 0, stages 1-5, effects 1, pipeline/results/facade on top."""
+    rest = module[len(DIAGNOSIS) + 1:].split(".")
+    if rest[0] in DIAGNOSIS_BASE:
+        return 0
+    if rest[0] == "effects":
+        return 1
+    if rest[0] in STAGES:
+        return 1 + STAGES.index(rest[0])
+    return len(STAGES) + 1
+
+
+def test_diagnosis_stages_import_downward():
+    upward = [f"{m} imports {t}" for m, targets in _graph().items() if m.startswith(DIAGNOSIS + ".")
+              for t in targets if t.startswith(DIAGNOSIS + ".") and _stage(t) > _stage(m)
+              and not (m.startswith(DIAGNOSIS + ".effects") and t.startswith(DIAGNOSIS + ".model."))]
+    assert not upward, "\n".join(upward)
+
+
+def test_upper_layers_use_the_diagnosis_facade():
+    """jobs, fleet and app name only `hdjoint.diagnosis`, never a stage's module, so that the stages
+    can move without touching them."""
+    reaching_in = [f"{m} imports {t}" for m, targets in _graph().items() if _layer(m) > LAYERS.index(DIAGNOSIS)
+                   for t in targets if t.startswith(DIAGNOSIS + ".")]
+    assert not reaching_in, "\n".join(reaching_in)
+
+
+def test_every_facade_name_resolves():
+    import hdjoint.diagnosis as facade
+    for name in facade.__all__:
+        assert getattr(facade, name) is not None, name

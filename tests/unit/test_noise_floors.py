@@ -1,10 +1,10 @@
-"""The sensors' noise the verdict's floor is built from (diagnosis/floors.py):
+"""The sensors' noise the verdict's floor is built from (diagnosis/verdict/floors.py):
 measured in a recording's own high-frequency band or at standstill, where
 motion and load changes only add to it."""
 import numpy as np
 import pytest
 
-from hdjoint.diagnosis.floors import high_band_noise, measured_noise, standstill_noise
+from hdjoint.diagnosis.verdict.floors import high_band_noise, measured_noise, standstill_noise
 
 
 def test_the_high_band_gives_a_white_noise_under_a_slow_motion_and_a_few_spikes():

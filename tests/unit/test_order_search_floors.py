@@ -5,9 +5,9 @@ the same either way; the detection limits, which ask only what passed, are
 spared three quarters of the fits."""
 import numpy as np
 
-from hdjoint.diagnosis import structure
-from hdjoint.diagnosis.kinematics import folds
-from hdjoint.diagnosis.structure import candidate_orders, order_search
+from hdjoint.diagnosis.model import structure
+from hdjoint.diagnosis.model.kinematics import folds
+from hdjoint.diagnosis.model.structure import candidate_orders, order_search
 
 N, FOLDS = 8000, 40
 
@@ -51,7 +51,7 @@ def test_the_anchors_solve_made_once_is_lstsqs_own_even_where_the_columns_are_de
     """detection_limit._anchor_fit: each size a limit tries fits its planting by
     the same anchor columns, so their least-squares solve is made once; it
     must give what np.linalg.lstsq gave (cut-off included) for any signature."""
-    from hdjoint.diagnosis.detection_limit import _anchor_fit
+    from hdjoint.diagnosis.verdict.detection_limit import _anchor_fit
     rng = np.random.default_rng(3)
     jacobian = rng.standard_normal((2, 500, 4))
     jacobian[..., 3] = jacobian[..., 0] - 2.0 * jacobian[..., 1]  # an anchor the others already span

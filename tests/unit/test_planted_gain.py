@@ -5,7 +5,7 @@ structure of the effect's own shape lets a tiny planting gain through the
 cross term alone; its own share tells that apart."""
 import numpy as np
 
-from hdjoint.diagnosis.detection_limit import planted_gains
+from hdjoint.diagnosis.verdict.detection_limit import planted_gains
 from hdjoint.diagnosis.rules import MIN_GAIN
 
 RNG = np.random.default_rng(5)
@@ -40,7 +40,7 @@ class _StubPlanting:
 
     def __new__(cls, base):
         from types import SimpleNamespace
-        from hdjoint.diagnosis.detection_limit import _Planting, reference_set
+        from hdjoint.diagnosis.verdict.detection_limit import _Planting, reference_set
         from hdjoint.diagnosis.effects import EFFECTS
         from hdjoint.io.parameters import defaults
         planting = object.__new__(_Planting)

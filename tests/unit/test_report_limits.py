@@ -1,7 +1,7 @@
 """The report's table of detection limits (report._limits_section) reads as
 sentences: units where a parameter has one, none for a ratio, and a limit
 the search never reached said in words."""
-from hdjoint.diagnosis.report import _limits_section
+from hdjoint.diagnosis.output.report import _limits_section
 
 
 def test_limits_read_with_units_and_a_missing_limit_in_words():
@@ -18,7 +18,7 @@ def test_limits_read_with_units_and_a_missing_limit_in_words():
 
 
 def test_a_ripple_limit_names_its_order_in_the_table_and_in_words():
-    from hdjoint.diagnosis.detection_limit import Limit
+    from hdjoint.diagnosis.verdict.detection_limit import Limit
     limit = Limit("kinematic_error", "ke_l1_a", 1.45e-4, 3.45e-4, 2.38, 1.0, "1 arcmin (catalogue)",
                   at=("theta_l", 2.0))
     doc = limit.as_dict()
@@ -34,7 +34,7 @@ def test_a_ripple_limit_names_its_order_in_the_table_and_in_words():
 
 def test_a_limit_names_the_shape_it_was_planted_with():
     # A Stribeck rise's limit holds for a rise over its omega_s, not for every shape.
-    from hdjoint.diagnosis.detection_limit import Limit, planted_shape, reference_set
+    from hdjoint.diagnosis.verdict.detection_limit import Limit, planted_shape, reference_set
     from hdjoint.diagnosis.effects import EFFECTS
     from hdjoint.io.parameters import defaults
     rise = EFFECTS["stribeck_friction"]

@@ -8,11 +8,11 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from hdjoint.diagnosis.calibration import Calibrated, Prior
-from hdjoint.diagnosis.resize import _resize_or_lookalike
-from hdjoint.diagnosis.hypotheses import Finding, Hypothesis
+from hdjoint.diagnosis.fit.priors import Calibrated, Prior
+from hdjoint.diagnosis.verdict.resize import _resize_or_lookalike
+from hdjoint.diagnosis.search.hypotheses import Finding, Hypothesis
 from hdjoint.diagnosis.effects import EFFECTS
-from hdjoint.diagnosis.structure import HeldOutGain
+from hdjoint.diagnosis.model.structure import HeldOutGain
 
 
 def _gain(g, z=2.0):

@@ -3,7 +3,7 @@ on white residuals, and honest where the residuals are correlated in blocks
 (what model-form error and coloured noise leave), where Laplace is too narrow."""
 import numpy as np
 
-from hdjoint.diagnosis.calibration import posterior_std, robust_std
+from hdjoint.diagnosis.fit.priors import posterior_std, robust_std
 
 Z95 = 1.959964
 

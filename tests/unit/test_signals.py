@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from hdjoint.io.recording import Recording
-from hdjoint.diagnosis.kinematics import gaussian_kernels, kinematics
+from hdjoint.diagnosis.model.kinematics import gaussian_kernels, kinematics
 
 
 @pytest.mark.parametrize("sigma", [2.5, 6.0, 11.3])

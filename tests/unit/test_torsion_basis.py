@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 
 from hdjoint import _core
-from hdjoint.diagnosis import part_torques as channels
+from hdjoint.diagnosis.model import torque_estimates as channels
 from hdjoint.io import parameters
-from hdjoint.diagnosis.part_torques import Prepared
+from hdjoint.diagnosis.model.torque_estimates import Prepared
 from hdjoint.io.recording import Recording
-from hdjoint.diagnosis.kinematics import kinematics
+from hdjoint.diagnosis.model.kinematics import kinematics
 
 TS = 1e-3
 

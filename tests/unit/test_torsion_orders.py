@@ -5,8 +5,8 @@ inside its interval; coloured noise alone names no order."""
 import numpy as np
 import pytest
 
-from hdjoint.diagnosis.kinematics import folds
-from hdjoint.diagnosis.torsion_orders import fit_orders, nuisances, order_evidence
+from hdjoint.diagnosis.model.kinematics import folds
+from hdjoint.diagnosis.search.torsion_orders import fit_orders, nuisances, order_evidence
 
 N = 2000
 ORDERS = [k / 2 for k in range(1, 13)]

@@ -6,8 +6,8 @@ from types import SimpleNamespace
 import numpy as np
 
 from hdjoint.io import parameters
-from hdjoint.diagnosis.prepare import unresolved_harmonics
-from hdjoint.diagnosis.structure import candidate_orders, resolves
+from hdjoint.diagnosis.model.prepare import unresolved_harmonics
+from hdjoint.diagnosis.model.structure import candidate_orders, resolves
 
 
 def _rec(motor_travel, link_travel):

@@ -4,8 +4,8 @@ beside a cubic trend along the angle, no resolved order takes it up, and a
 resolved ripple is still found beside it."""
 import numpy as np
 
-from hdjoint.diagnosis.kinematics import folds
-from hdjoint.diagnosis.structure import (candidate_orders, lowest_unresolved_order, order_search, unresolved_order,
+from hdjoint.diagnosis.model.kinematics import folds
+from hdjoint.diagnosis.model.structure import (candidate_orders, lowest_unresolved_order, order_search, unresolved_order,
     unresolved_trend)
 
 N, FOLDS, TRAVEL = 8000, 40, 2.4  # rad of link travel: the independent truth's paper run

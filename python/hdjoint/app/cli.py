@@ -91,7 +91,7 @@ def cmd_diagnose(args) -> int:
 
 def diagnosis_lines(doc: dict) -> list[str]:
     """What `hdjoint diagnose` prints of its findings document."""
-    from hdjoint.diagnosis.validation import summary_line
+    from hdjoint.diagnosis import summary_line
     lines = [f"verdict: {doc['verdict']}"]
     from hdjoint.io.screening import found_anything
     lines += [f"  screening: {s['recording']}: {s['summary']}" for s in doc.get("screening", []) if found_anything(s)]

@@ -8,7 +8,7 @@ import html
 from pathlib import Path
 
 from hdjoint.app.demo_story import DURATION, FIRST, HIDDEN, SECOND, Story
-from hdjoint.diagnosis.rules import INTERVAL
+from hdjoint.diagnosis import INTERVAL
 from hdjoint.io import parameters
 
 TITLE = "hdjoint demo: a hidden effect named, modelled and closed without a torque sensor"

@@ -1,14 +1,14 @@
 """The diagnosis from recordings to its findings document, stage by stage,
 each taking the results of those before it:
 
-  prepare    the recordings checked and joined, folds, fit sample, channels (prepare.py)
-  calibrate  the nominal model's parameters, MAP with tolerance priors, and the noise (calibrate.py, objective.py)
+  prepare    the recordings checked and joined, folds, fit sample, channels (model/prepare.py)
+  calibrate  the nominal model's parameters, MAP with tolerance priors, and the noise (fit/nominal_calibration.py, fit/objective.py)
   locate     structure in the calibrated residuals (findings.remaining_structure; beside select's first round)
-  select     forward selection over the effects the recording can test (select.py, search.py)
-  resize     parameters the nominal model has, needed beyond their tolerance (resize.py)
-  limits     the smallest size of each untold effect the recording would show (detection_limit.py)
-  accuracy   each channel's residual against its sensors' floor and the accuracy asked for (floors.py; beside limits)
-  document   findings.json (findings.py), with terms proposed for what no effect explains (open_library.py)
+  select     forward selection over the effects the recording can test (search/selection.py, search/hypothesis_search.py)
+  resize     parameters the nominal model has, needed beyond their tolerance (verdict/resize.py)
+  limits     the smallest size of each untold effect the recording would show (verdict/detection_limit.py)
+  accuracy   each channel's residual against its sensors' floor and the accuracy asked for (verdict/floors.py; beside limits)
+  document   findings.json (verdict/findings.py), with terms proposed for what no effect explains (verdict/open_library.py)
 """
 from __future__ import annotations
 
@@ -17,17 +17,17 @@ from typing import Callable
 
 from threadpoolctl import threadpool_limits
 
-from hdjoint.diagnosis.calibrate import calibrate, calibration_table
-from hdjoint.diagnosis.detection_limit import detection_limits
-from hdjoint.diagnosis.findings import document, remaining_structure
-from hdjoint.diagnosis.floors import accuracy
+from hdjoint.diagnosis.fit.nominal_calibration import calibrate, calibration_table
+from hdjoint.diagnosis.verdict.detection_limit import detection_limits
+from hdjoint.diagnosis.verdict.findings import document, remaining_structure
+from hdjoint.diagnosis.verdict.floors import accuracy
 from hdjoint.diagnosis.forked import Deferred
-from hdjoint.diagnosis.open_library import propose_terms
-from hdjoint.diagnosis.prepare import prepare
-from hdjoint.diagnosis.resize import released, resized
+from hdjoint.diagnosis.verdict.open_library import propose_terms
+from hdjoint.diagnosis.model.prepare import prepare
+from hdjoint.diagnosis.verdict.resize import released, resized
 from hdjoint.diagnosis.results import DiagnosisResult
-from hdjoint.diagnosis.search import HypothesisSearch
-from hdjoint.diagnosis.select import select, unconfirmed_structure
+from hdjoint.diagnosis.search.hypothesis_search import HypothesisSearch
+from hdjoint.diagnosis.search.selection import select, unconfirmed_structure
 from hdjoint.io.recording import Recording
 
 

@@ -4,13 +4,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from hdjoint.diagnosis.calibrate import Calibration
-from hdjoint.diagnosis.calibration import Calibrated
-from hdjoint.diagnosis.floors import Accuracy
-from hdjoint.diagnosis.hypotheses import Finding, Fit
-from hdjoint.diagnosis.objective import Objective
-from hdjoint.diagnosis.search import HypothesisSearch
-from hdjoint.diagnosis.select import Selection
+from hdjoint.diagnosis.fit.nominal_calibration import Calibration
+from hdjoint.diagnosis.fit.priors import Calibrated
+from hdjoint.diagnosis.verdict.floors import Accuracy
+from hdjoint.diagnosis.fit.objective import Fit
+from hdjoint.diagnosis.search.hypotheses import Finding
+from hdjoint.diagnosis.fit.objective import Objective
+from hdjoint.diagnosis.search.hypothesis_search import HypothesisSearch
+from hdjoint.diagnosis.search.selection import Selection
 
 
 @dataclass(frozen=True)

@@ -69,7 +69,7 @@ DOMINANT_GAIN = 0.30
 # An order stands out of its off-orders' floor by this factor.
 ORDER_PROMINENCE = 3.0
 
-# --- The verdict's absolute yardstick (floors.py) ------------------------------
+# --- The verdict's absolute yardstick (verdict/floors.py) -------------------------
 # The accuracy a model must reach, by default, as a share of the torque span:
 # torque estimators and sensors of this class state a few % of their range.
 ACCURACY_SHARE = 0.05

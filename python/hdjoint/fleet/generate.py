@@ -11,7 +11,7 @@ from pathlib import Path
 
 from hdjoint.fmu import concealed_effects as cases, experiments
 from hdjoint.io import parameters
-from hdjoint.diagnosis.effects import KINEMATIC_EQ7
+from hdjoint.diagnosis import KINEMATIC_EQ7
 from hdjoint.io.recording import write_recording
 
 

@@ -20,7 +20,7 @@ from datetime import datetime
 import numpy as np
 from scipy import stats
 
-from hdjoint.diagnosis.effects import EFFECTS
+from hdjoint.diagnosis import EFFECTS
 
 ALPHA = 0.05
 # A drift matters when the fitted change over the observed period reaches the

@@ -21,13 +21,8 @@ import tempfile
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from hdjoint.diagnosis.channels import Evaluator, channels_for
-from hdjoint.diagnosis.effects import HELD_WITHOUT_SENSOR as HELD
-from hdjoint.diagnosis.kinematics import kinematics
-from hdjoint.diagnosis.part_torques import Prepared
-from hdjoint.diagnosis.pipeline import diagnose
-from hdjoint.diagnosis.prepare import DiagnosisError, check_recording, place_offset
-from hdjoint.diagnosis.rules import INTERVAL
+from hdjoint.diagnosis import (Evaluator, channels_for, HELD_WITHOUT_SENSOR as HELD, kinematics, Prepared, diagnose,
+                                DiagnosisError, check_recording, place_offset, INTERVAL)
 from hdjoint.io import parameters
 from hdjoint.io.outputs import check_replaceable, replace_into
 from hdjoint.io.recording import Recording

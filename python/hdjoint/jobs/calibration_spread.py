@@ -19,9 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hdjoint.diagnosis.effects import HELD_WITHOUT_SENSOR as HELD
-from hdjoint.diagnosis.prepare import ENCODER_ZERO
-from hdjoint.diagnosis.rules import INTERVAL_Z
+from hdjoint.diagnosis import HELD_WITHOUT_SENSOR as HELD, ENCODER_ZERO, INTERVAL_Z
 from hdjoint.estimation.engines import INPUTS, CoreEngine, RowFeeder
 from hdjoint.io import parameters
 from hdjoint.io.recording import CHUNK_ROWS, Recording

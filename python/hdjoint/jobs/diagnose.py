@@ -34,8 +34,7 @@ def diagnose_to_directory(recording, params, out, validate=(), time_unit: str | 
 
 
 def _diagnose_locked(paths, params, out, validate, time_unit, current_sign) -> dict:
-    from hdjoint.diagnosis.forked import helper
-    from hdjoint.diagnosis.plots import prepare_drawing
+    from hdjoint.diagnosis import helper, prepare_drawing
     # The report's figures are drawn by a helper that imports matplotlib while the diagnosis runs.
     with helper(prepare_drawing) as drawing:
         doc, page = _diagnosed(paths, params, validate, time_unit, current_sign, drawing)
@@ -46,11 +45,7 @@ def _diagnose_locked(paths, params, out, validate, time_unit, current_sign) -> d
 
 def _diagnosed(paths, params, validate, time_unit, current_sign, drawing) -> tuple[dict, str]:
     from hdjoint.io import parameters
-    from hdjoint.diagnosis import report
-    from hdjoint.diagnosis.findings import where
-    from hdjoint.diagnosis.prepare import DiagnosisError
-    from hdjoint.diagnosis.pipeline import diagnose
-    from hdjoint.diagnosis.validation import validate as validate_on
+    from hdjoint.diagnosis import report, where, DiagnosisError, diagnose, validate as validate_on
     recs = [read_recording(path, time_unit, current_sign) for path in paths]
     # The other recordings are read first too: a bad file stops before any work.
     others = [read_recording(path, time_unit, current_sign) for path in validate]

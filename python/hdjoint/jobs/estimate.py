@@ -190,7 +190,7 @@ def _reading_jitter(params_path, first: Recording, params: dict) -> ReadingJitte
 
 def measured_reading_jitter(time, theta_m, theta_l) -> ReadingJitter:
     """The reading-time jitter of both encoders' readings, with its interval at the diagnosis's coverage."""
-    from hdjoint.diagnosis.rules import INTERVAL
+    from hdjoint.diagnosis import INTERVAL
     return reading_jitter(time, (theta_m, theta_l), INTERVAL)
 
 

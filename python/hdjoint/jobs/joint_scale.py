@@ -21,8 +21,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 from scipy.special import huber
 
-from hdjoint.diagnosis.effects import HELD_WITHOUT_SENSOR as HELD
-from hdjoint.diagnosis.rules import INTERVAL, RESIZE_Z
+from hdjoint.diagnosis import HELD_WITHOUT_SENSOR as HELD, INTERVAL, RESIZE_Z
 from hdjoint.io import parameters
 
 # The power of torque in each unit of the joint's model: inertia times acceleration is a torque.

@@ -22,9 +22,9 @@ import numpy as np
 
 from hdjoint.diagnosis.effects.base import Effect, RecordingScale, Size, TruthDraw
 from hdjoint.diagnosis.effects.coulomb_friction import EFFECT as COULOMB
-from hdjoint.diagnosis.kinematics import Kinematics
+from hdjoint.diagnosis.model.kinematics import Kinematics
 from hdjoint.diagnosis.rules import EVIDENCE_Z
-from hdjoint.diagnosis.structure import fold_z, relative_fold_gains
+from hdjoint.diagnosis.model.structure import fold_z, relative_fold_gains
 
 # The speed range a Stribeck rise is tested over (the effect's `revealed_by`).
 STRIBECK_SPEEDS = (0.5, 20.0)  # rad/s

@@ -3,9 +3,9 @@ gain is a finding; a look-alike that explains as much, and cannot be told
 apart fold by fold, makes it ambiguous."""
 from __future__ import annotations
 
-from hdjoint.diagnosis.hypotheses import Finding, Hypothesis
+from hdjoint.diagnosis.search.hypotheses import Finding, Hypothesis
 from hdjoint.diagnosis.rules import SEPARATED_RATIO, SEPARATED_Z
-from hdjoint.diagnosis.structure import fold_z
+from hdjoint.diagnosis.model.structure import fold_z
 
 
 def separated(best: Hypothesis, rival: Hypothesis) -> bool:

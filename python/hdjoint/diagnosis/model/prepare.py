@@ -11,13 +11,13 @@ from typing import Callable
 
 import numpy as np
 
-from hdjoint.diagnosis.channels import Channel, Evaluator, channels_for
-from hdjoint.diagnosis.kinematics import folds as make_folds
-from hdjoint.diagnosis.kinematics import kinematics
-from hdjoint.diagnosis.part_torques import Prepared
-from hdjoint.diagnosis.kinematics import sample_windows, window_labels
+from hdjoint.diagnosis.model.residual_channels import Channel, Evaluator, channels_for
+from hdjoint.diagnosis.model.kinematics import folds as make_folds
+from hdjoint.diagnosis.model.kinematics import kinematics
+from hdjoint.diagnosis.model.torque_estimates import Prepared
+from hdjoint.diagnosis.model.kinematics import sample_windows, window_labels
 from hdjoint.diagnosis.rules import ANALYSED_SECONDS, FIT_SAMPLES, FOLDS, MIN_DURATION, MIN_SAMPLES
-from hdjoint.diagnosis.structure import RESOLVING_PERIODS, resolves
+from hdjoint.diagnosis.model.structure import RESOLVING_PERIODS, resolves
 from hdjoint.io import parameters
 from hdjoint.io.recording import Recording
 from hdjoint.io.timebase import GAP_FACTOR

@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import binary_dilation
 
-from hdjoint.diagnosis.kinematics import Kinematics
+from hdjoint.diagnosis.model.kinematics import Kinematics
 
 REST_SPEED = 0.5   # rad/s of the motor: below it, for REST_FOR, the motor rests
 REST_FOR = 0.3     # s: a dwell; a swing through zero speed passes in less

@@ -18,15 +18,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from hdjoint.diagnosis.part_torques import Prepared
-from hdjoint.diagnosis.current_alignment import fit_shift
-from hdjoint.diagnosis.channels import Evaluator, channels_for
-from hdjoint.diagnosis.prepare import check_recording, place_offset
-from hdjoint.diagnosis.findings import estimator_comparison
+from hdjoint.diagnosis.model.torque_estimates import Prepared
+from hdjoint.diagnosis.model.current_alignment import fit_shift
+from hdjoint.diagnosis.model.residual_channels import Evaluator, channels_for
+from hdjoint.diagnosis.model.prepare import check_recording, place_offset
+from hdjoint.diagnosis.verdict.findings import estimator_comparison
 from hdjoint.estimation.metrics import error_figures
-from hdjoint.diagnosis.operating_range import beyond_fitted_range
+from hdjoint.diagnosis.model.operating_range import beyond_fitted_range
 from hdjoint.io.recording import Recording
-from hdjoint.diagnosis.kinematics import kinematics
+from hdjoint.diagnosis.model.kinematics import kinematics
 
 
 class _Source:

@@ -49,13 +49,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from hdjoint.io import parameters
-from hdjoint.diagnosis.part_torques import torsion_less_kinematic
+from hdjoint.diagnosis.model.torque_estimates import torsion_less_kinematic
 from hdjoint.diagnosis.rules import MIN_GAIN, RESIZE_Z, passes
 from hdjoint.diagnosis.effects import Effect, slot_on
 from hdjoint.diagnosis.forked import Deferred, map_forked
-from hdjoint.diagnosis.significance import null_gain, null_z, p_value
-from hdjoint.diagnosis.structure import held_out_gain_sq
-from hdjoint.diagnosis.torsion_orders import nuisances as torsion_nuisances
+from hdjoint.diagnosis.search.significance import null_gain, null_z, p_value
+from hdjoint.diagnosis.model.structure import held_out_gain_sq
+from hdjoint.diagnosis.search.torsion_orders import nuisances as torsion_nuisances
 
 COARSE = 2.0      # the size grid's step, then refined by halving its exponent twice
 SMALLEST, LARGEST = 1.0 / 1024.0, 1024.0  # sizes searched, as multiples of the reference

@@ -29,7 +29,7 @@ from hdjoint.diagnosis.effects import friction_law_parameters, part_parameters
 from hdjoint.diagnosis.effects.kinematic_error import EFFECT as KINEMATIC_ERROR
 from hdjoint.diagnosis.effects.kinematic_error import KINEMATIC_EQ7
 from hdjoint.diagnosis.forked import threads_here
-from hdjoint.diagnosis.kinematics import Kinematics, _Filter
+from hdjoint.diagnosis.model.kinematics import Kinematics, _Filter
 
 
 # Values kept per cache: a fit's Jacobian moves one parameter at a time and

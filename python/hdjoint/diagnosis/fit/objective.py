@@ -7,22 +7,34 @@ measures the noise (with_noise), and every later stage reads the last."""
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import least_squares
 
-from hdjoint.diagnosis.calibration import (Prior, correlation, deviations, posterior_std, robust_covariance,
+from hdjoint.diagnosis.fit.priors import (Prior, correlation, deviations, posterior_std, robust_covariance,
                                            widened)
-from hdjoint.diagnosis.channels import Channel
+from hdjoint.diagnosis.model.residual_channels import Channel
 from hdjoint.diagnosis.effects import ALWAYS_CALIBRATED, calibrated_parameters, orthogonal_parameters
 from hdjoint.diagnosis.effects.base import RecordingScale
 from hdjoint.diagnosis.forked import forked_map
-from hdjoint.diagnosis.hypotheses import Fit
-from hdjoint.diagnosis.part_torques import sharp_transmission, tau_transmission
-from hdjoint.diagnosis.prepare import Setup, place_offset
+from hdjoint.diagnosis.model.torque_estimates import sharp_transmission, tau_transmission
+from hdjoint.diagnosis.model.prepare import Setup, place_offset
 from hdjoint.diagnosis.rules import SCORE_BLOCKS
-from hdjoint.diagnosis.significance import NullNoise
 from hdjoint.io import parameters
+
+
+@dataclass
+class Fit:
+    params: dict
+    names: list[str]
+    cost: float
+    # Posterior std of each fitted parameter: the wider of the two below, times its model-form factor (calibration.py).
+    std: dict = field(default_factory=dict)
+    std_laplace: dict = field(default_factory=dict)
+    std_robust: dict = field(default_factory=dict)
+    # The fitted parameters' posterior correlation matrix (the cluster-robust covariance's), in `names` order.
+    correlation: np.ndarray | None = None
 
 
 def _typical_size(name: str, value: float) -> float:
@@ -173,11 +185,6 @@ class Objective:
                                 for c in channels])
             columns.append((shifted - base) / h)
         return np.where(self.used[None, :, None], np.stack(columns, axis=2), 0.0)
-
-    def null_noise(self, p) -> NullNoise:
-        """The simulated null's noise at `p`: replicates with each channel's colour."""
-        return NullNoise(np.stack([np.where(self.used, np.nan_to_num(self.normalised_residual(c, p)),
-                                            0.0) for c in self.channels]), compared=self.eval.compared_by_channel())
 
     # ---- the fit -------------------------------------------------------------
     def fit(self, p: dict, names: list[str], channels: list[Channel], starts: tuple[dict, ...] = ({},),

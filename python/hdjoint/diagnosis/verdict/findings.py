@@ -10,11 +10,11 @@ from hdjoint import _core
 from hdjoint.io import parameters
 from hdjoint.estimation.metrics import error_figures
 from hdjoint.diagnosis.rules import INTERVAL_Z
-from hdjoint.diagnosis.cannot_tell import cannot_tell
+from hdjoint.diagnosis.verdict.cannot_tell import cannot_tell
 from hdjoint.diagnosis.rules import FALSE_DISCOVERY_RATE, LOCATED_GAIN, LOCATED_Z
-from hdjoint.diagnosis.significance import NullNoise, benjamini_hochberg, null_z, p_value
-from hdjoint.diagnosis.kinematics import regime_filter
-from hdjoint.diagnosis.structure import resolving_travel, scan, unresolved_orders
+from hdjoint.diagnosis.search.significance import NullNoise, benjamini_hochberg, null_z, p_value
+from hdjoint.diagnosis.model.kinematics import regime_filter
+from hdjoint.diagnosis.model.structure import resolving_travel, scan, unresolved_orders
 
 
 def _rms(x) -> float:

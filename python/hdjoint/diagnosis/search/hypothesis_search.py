@@ -17,20 +17,21 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from hdjoint.diagnosis.channels import TORSION_VIEW, Channel
+from hdjoint.diagnosis.model.residual_channels import TORSION_VIEW, Channel
 from hdjoint.diagnosis.effects import EFFECTS, Effect, slot_on, testable
 from hdjoint.diagnosis.forked import Deferred, map_forked
-from hdjoint.diagnosis.hypotheses import Hypothesis, delta_bic
-from hdjoint.diagnosis.objective import Objective
-from hdjoint.diagnosis.part_torques import ESTIMATES, torsion_less_kinematic
-from hdjoint.diagnosis.prepare import eq7_orders
+from hdjoint.diagnosis.search.hypotheses import Hypothesis, delta_bic
+from hdjoint.diagnosis.fit.objective import Objective
+from hdjoint.diagnosis.model.torque_estimates import ESTIMATES, torsion_less_kinematic
+from hdjoint.diagnosis.model.prepare import eq7_orders
 from hdjoint.diagnosis.rules import (DOMINANT_GAIN, EVIDENCE_Z, FALSE_DISCOVERY_RATE, HYPOTHESIS_FTOL, MIN_GAIN,
                                      ORDER_PROMINENCE, STRUCTURE_GAIN, UNRESOLVED_GAIN)
-from hdjoint.diagnosis.significance import NullNoise, benjamini_hochberg, null_gain, null_z, p_value, standardised
-from hdjoint.diagnosis.structure import (Order, candidate_orders, held_out_gain_sq, lowest_unresolved_order,
+from hdjoint.diagnosis.search.significance import (NullNoise, benjamini_hochberg, null_gain, null_noise, null_z,
+                                                   p_value, standardised)
+from hdjoint.diagnosis.model.structure import (Order, candidate_orders, held_out_gain_sq, lowest_unresolved_order,
                                          order_search, unresolved_order, unresolved_trend)
-from hdjoint.diagnosis.torsion_orders import MIN_REVOLUTIONS, fit_orders, order_evidence
-from hdjoint.diagnosis.torsion_orders import nuisances as torsion_nuisances
+from hdjoint.diagnosis.search.torsion_orders import MIN_REVOLUTIONS, fit_orders, order_evidence
+from hdjoint.diagnosis.search.torsion_orders import nuisances as torsion_nuisances
 from hdjoint.io import parameters
 
 
@@ -54,7 +55,7 @@ class HypothesisSearch:
     def start_round(self, p: dict) -> None:
         """A round of hypotheses at `p`: its null noise, and the residual's correlation
         measured here once (the forked fits of the round inherit both)."""
-        self.noise, self.noise_at = self.objective.null_noise(p), p
+        self.noise, self.noise_at = null_noise(self.objective, p), p
         self.objective.correlation_length(p)
 
     def order_search(self, p, part: str, channels: list[Channel], angles: tuple[str, ...],
@@ -315,7 +316,7 @@ class HypothesisSearch:
         at this very set (a round that accepts nothing leaves the set as it
         was, and sigma is fixed after calibration), else made now. The same
         noise either way (NullNoise is seeded), its replicates already made."""
-        return self.noise if self.noise is not None and self.noise_at is p else self.objective.null_noise(p)
+        return self.noise if self.noise is not None and self.noise_at is p else null_noise(self.objective, p)
 
     def testable_effects(self, p: dict) -> list[Effect]:
         """Effects the nominal set lacks that this recording can test."""

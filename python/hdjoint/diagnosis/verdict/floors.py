@@ -28,11 +28,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hdjoint.diagnosis.channels import Channel
+from hdjoint.diagnosis.model.residual_channels import Channel
 from hdjoint.diagnosis.effects import EFFECTS
-from hdjoint.diagnosis.findings import regimes, segments
-from hdjoint.diagnosis.kinematics import regime_filter
-from hdjoint.diagnosis.objective import Objective
+from hdjoint.diagnosis.verdict.findings import regimes, segments
+from hdjoint.diagnosis.model.kinematics import regime_filter
+from hdjoint.diagnosis.fit.objective import Objective
 from hdjoint.io import parameters
 from hdjoint.diagnosis.rules import ACCURACY_SHARE, MAX_MISS_SHARE, STANDSTILL_SAMPLES, TORQUE_SPAN_PERCENTILES
 

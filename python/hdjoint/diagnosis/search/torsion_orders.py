@@ -22,9 +22,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hdjoint.diagnosis.significance import NullNoise, benjamini_hochberg, null_z, p_value
+from hdjoint.diagnosis.search.significance import NullNoise, benjamini_hochberg, null_z, p_value
 from hdjoint.diagnosis.rules import INTERVAL_Z
-from hdjoint.diagnosis.structure import HeldOutGain, held_out_gain
+from hdjoint.diagnosis.model.structure import HeldOutGain, held_out_gain
 
 # A motor order needs the motor to turn this often: half orders apart, a ripple told from a drift.
 MIN_REVOLUTIONS = 2.0

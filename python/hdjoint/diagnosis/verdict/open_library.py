@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from hdjoint.diagnosis.rules import EVIDENCE_Z, PROPOSAL_MIN_GAIN
-from hdjoint.diagnosis.structure import held_out_gain_sq
+from hdjoint.diagnosis.model.structure import held_out_gain_sq
 
 MAX_TERMS = 4
 SAMPLES = 6000         # training samples the regression sees (and as many held out)

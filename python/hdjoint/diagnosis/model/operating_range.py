@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from hdjoint.diagnosis.part_torques import Prepared
+from hdjoint.diagnosis.model.torque_estimates import Prepared
 
 CENTRAL = 99.0            # percent of the fitted samples that make its range
 EXTRAPOLATED_SHARE = 0.05  # five times the fitted recording's own share outside

@@ -12,15 +12,15 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from hdjoint.diagnosis import normal as norm
-from hdjoint.diagnosis.calibration import Calibrated, Prior
+from hdjoint.diagnosis.fit.priors import Calibrated, Prior
 from hdjoint.diagnosis.effects import EFFECTS, Effect, owner
-from hdjoint.diagnosis.hypotheses import Finding
-from hdjoint.diagnosis.objective import Objective
-from hdjoint.diagnosis.prepare import unresolved_harmonics
+from hdjoint.diagnosis.search.hypotheses import Finding
+from hdjoint.diagnosis.fit.objective import Objective
+from hdjoint.diagnosis.model.prepare import unresolved_harmonics
 from hdjoint.diagnosis.rules import (EVIDENCE_Z, FALSE_DISCOVERY_RATE, GROSS_CHECKED, GROSS_FACTOR, GROSS_RATIO,
                                      HYPOTHESIS_FTOL, INTERVAL_Z, MIN_GAIN, RESIZE_Z)
-from hdjoint.diagnosis.select import Selection
-from hdjoint.diagnosis.structure import held_out_gain_sq
+from hdjoint.diagnosis.search.selection import Selection
+from hdjoint.diagnosis.model.structure import held_out_gain_sq
 from hdjoint.io import parameters
 
 
@@ -202,7 +202,7 @@ def _within_factor(estimate: float, nominal: float) -> bool:
 def _constant_off(objective: Objective, c: Calibrated, before: dict, after: dict, gain, p_value: float) -> list[dict]:
     """A constant of the joint no effect owns, off by a factor: unexplained
     structure on the channel it changes most, with the torque it misses."""
-    from hdjoint.diagnosis.floors import torque_span
+    from hdjoint.diagnosis.verdict.floors import torque_span
     lo, hi = c.interval
     unit = parameters.table()[c.name].unit
     span = torque_span(objective, after)

@@ -1,18 +1,17 @@
-"""A fit, a tested hypothesis (an effect's parameters freed, with its held-out
+"""A tested hypothesis (an effect's parameters freed, with its held-out
 evidence and the acceptance rule read from rules.py) and a finding."""
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
 
-import numpy as np
 
-from hdjoint.diagnosis.calibration import Calibrated
+from hdjoint.diagnosis.fit.priors import Calibrated
 from hdjoint.diagnosis import normal as norm
 
 from hdjoint.diagnosis.effects import Effect
 from hdjoint.diagnosis.rules import FALSE_DISCOVERY_RATE, MIN_GAIN, SEEN_BIC, UNCONFIRMED_GAIN, steady_over_folds
-from hdjoint.diagnosis.structure import HeldOutGain, Order
+from hdjoint.diagnosis.model.structure import HeldOutGain, Order
 
 
 def delta_bic(n_eff: float, mse_before: float, mse_after: float, added: int) -> float:
@@ -20,19 +19,6 @@ def delta_bic(n_eff: float, mse_before: float, mse_after: float, added: int) -> 
     return n_eff * math.log(max(mse_after, 1e-300) / max(mse_before, 1e-300)) + added * math.log(n_eff)
 
 
-
-
-@dataclass
-class Fit:
-    params: dict
-    names: list[str]
-    cost: float
-    # Posterior std of each fitted parameter: the wider of the two below, times its model-form factor (calibration.py).
-    std: dict = field(default_factory=dict)
-    std_laplace: dict = field(default_factory=dict)
-    std_robust: dict = field(default_factory=dict)
-    # The fitted parameters' posterior correlation matrix (the cluster-robust covariance's), in `names` order.
-    correlation: np.ndarray | None = None
 
 
 @dataclass

@@ -29,7 +29,7 @@ from functools import lru_cache
 import numpy as np
 
 from hdjoint.diagnosis import normal as norm
-from hdjoint.diagnosis.structure import relative_fold_gains
+from hdjoint.diagnosis.model.structure import relative_fold_gains
 
 
 REPLICATES = 48
@@ -172,3 +172,9 @@ def benjamini_hochberg(p: list[float]) -> list[float]:
     out = np.empty(m)
     out[order] = np.minimum(adjusted, 1.0)
     return [float(x) for x in out]
+
+
+def null_noise(objective, p) -> NullNoise:
+    """The simulated null's noise of an Objective at `p`: replicates with each channel's colour."""
+    return NullNoise(np.stack([np.where(objective.used, np.nan_to_num(objective.normalised_residual(c, p)), 0.0)
+                               for c in objective.channels]), compared=objective.eval.compared_by_channel())

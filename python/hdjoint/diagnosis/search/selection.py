@@ -8,13 +8,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from hdjoint.diagnosis.calibrate import Calibration
-from hdjoint.diagnosis.decide import finding_for
+from hdjoint.diagnosis.fit.nominal_calibration import Calibration
+from hdjoint.diagnosis.search.decide import finding_for
 from hdjoint.diagnosis.effects import Effect
 from hdjoint.diagnosis.forked import Deferred
-from hdjoint.diagnosis.hypotheses import Finding, Fit, Hypothesis
-from hdjoint.diagnosis.search import HypothesisSearch
-from hdjoint.diagnosis.significance import benjamini_hochberg
+from hdjoint.diagnosis.fit.objective import Fit
+from hdjoint.diagnosis.search.hypotheses import Finding, Hypothesis
+from hdjoint.diagnosis.search.hypothesis_search import HypothesisSearch
+from hdjoint.diagnosis.search.significance import benjamini_hochberg
 
 
 @dataclass(frozen=True)

@@ -9,8 +9,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hdjoint.diagnosis.motor_rest import motor_at_rest
-from hdjoint.diagnosis.part_torques import ESTIMATES, SMOOTHED_PARTS, Prepared, Recent, depends_on, sharp_transmission
+from hdjoint.diagnosis.model.motor_rest import motor_at_rest
+from hdjoint.diagnosis.model.torque_estimates import ESTIMATES, SMOOTHED_PARTS, Prepared, Recent, depends_on, sharp_transmission
 
 
 @dataclass

@@ -9,12 +9,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from hdjoint.diagnosis.calibration import Calibrated, priors
-from hdjoint.diagnosis.current_alignment import align_current
+from hdjoint.diagnosis.fit.priors import Calibrated, priors
+from hdjoint.diagnosis.model.current_alignment import align_current
 from hdjoint.diagnosis.effects import calibrated_parameters
-from hdjoint.diagnosis.hypotheses import Fit
-from hdjoint.diagnosis.objective import Objective
-from hdjoint.diagnosis.prepare import Setup
+from hdjoint.diagnosis.fit.objective import Fit
+from hdjoint.diagnosis.fit.objective import Objective
+from hdjoint.diagnosis.model.prepare import Setup
 from hdjoint.io import parameters
 
 

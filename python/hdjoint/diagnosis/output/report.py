@@ -7,8 +7,8 @@ import html
 
 import numpy as np
 
-from hdjoint.diagnosis import plots as dp
-from hdjoint.diagnosis.detection_limit import size_in_words
+from hdjoint.diagnosis.output import plots as dp
+from hdjoint.diagnosis.verdict.detection_limit import size_in_words
 from hdjoint.diagnosis.forked import map_forked
 from hdjoint.diagnosis.rules import (
     EVIDENCE_Z,
@@ -17,7 +17,7 @@ from hdjoint.diagnosis.rules import (
     SEEN_BIC,
     STEADY_FOLD_SHARE,
 )
-from hdjoint.diagnosis.structure import candidate_orders
+from hdjoint.diagnosis.model.structure import candidate_orders
 from hdjoint.io.parameters import unit_in_text, values_in_text
 from hdjoint.io.screening import found_anything
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from hdjoint.diagnosis.structure import harmonic_amplitude
+from hdjoint.diagnosis.model.structure import harmonic_amplitude
 from hdjoint.io.figures import bare_figure, envelope, png_data_uri
 
 

@@ -1,0 +1,1 @@
+"""Fitting the model: the MAP objective, priors and posteriors, the nominal calibration."""

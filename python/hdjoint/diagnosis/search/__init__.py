@@ -1,0 +1,1 @@
+"""Searching for missing physics: hypotheses, their order search and significance, forward selection."""

@@ -1,0 +1,1 @@
+"""The verdict: noise floors, resized parameters, detection limits, the findings document."""
