@@ -24,3 +24,20 @@ def test_a_flexspline_two_and_a_half_times_softer_is_resized_with_its_interval()
     assert kf["nominal"] == nominal["Kf"]
     assert kf["lo"] < truth["Kf"] < kf["hi"] < nominal["Kf"] / 2
     assert doc["params"]["Kf"] == pytest.approx(truth["Kf"], rel=0.05)
+
+
+def test_a_flexspline_two_and_a_half_times_stiffer_is_resized_with_an_interval_holding_the_truth():
+    """Stiffer is the hard side (issue 53, goal 5): the torsion shrinks toward the encoders' counts,
+    so holding Kf at its tolerance costs little held out, and the verdict was `consistent` with a
+    prior-held interval (11,500-15,600) excluding the truth. Released, its interval lies wholly
+    beyond the stated band: a finding, with an interval that holds the truth."""
+    nominal = dict(parameters.defaults(), wg_load=1.0, Kf=7000.0)
+    truth = dict(experiments.true_joint_parameters(nominal), Kf=17500.0)
+    rec = experiments.run("paper", joint=truth, nominal=nominal, duration=20.0)
+    _, doc = diagnose(rec, nominal)
+    assert doc["verdict"] != "consistent"
+    resized = [f for f in doc["findings"] if f["kind"] in ("resized", "ambiguous") and "Kf" in f["parameters"]]
+    assert resized, [(f["effect"], f["kind"], list(f["parameters"])) for f in doc["findings"]]
+    kf = resized[0]["parameters"]["Kf"]
+    assert nominal["Kf"] * 1.2 < kf["lo"] < truth["Kf"] < kf["hi"]
+    assert doc["calibration"]["Kf"]["lo"] == kf["lo"]  # the calibration reports the released interval too
