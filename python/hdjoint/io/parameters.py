@@ -291,9 +291,11 @@ def documented(params: dict[str, float] | None = None, tolerance: dict[str, floa
         p = info[name]
         if not p.calibrated():
             return "not calibrated by the diagnosis"
-        absolute = f", at least {p.tolerance_absolute:g}{unit_in_text(p.unit)}" if p.tolerance_absolute > 0 else ""
         source = f" ({p.tolerance_source})" if p.tolerance_source else ""
-        return f"{100 * priors.get(name, p.tolerance_relative):g} % (1 sigma){absolute}{source}"
+        if name not in priors:
+            return f"{p.tolerance_absolute:g}{unit_in_text(p.unit)} (1 sigma, absolute){source}"
+        absolute = f", at least {p.tolerance_absolute:g}{unit_in_text(p.unit)}" if p.tolerance_absolute > 0 else ""
+        return f"{100 * priors[name]:g} % (1 sigma){absolute}{source}"
 
     return {ABOUT_KEY: ["An hdjoint parameter set (docs/estimators.md#parameter-files): name: value in SI units.",
                         "A file may set only some parameters; the rest take their defaults.",
