@@ -297,7 +297,7 @@ def documented(params: dict[str, float] | None = None, tolerance: dict[str, floa
         absolute = f", at least {p.tolerance_absolute:g}{unit_in_text(p.unit)}" if p.tolerance_absolute > 0 else ""
         return f"{100 * priors[name]:g} % (1 sigma){absolute}{source}"
 
-    return {ABOUT_KEY: ["An hdjoint parameter set (docs/estimators.md#parameter-files): name: value in SI units.",
+    return {ABOUT_KEY: ["An hdjoint parameter set (docs/estimators.md): name: value in SI units.",
                         "A file may set only some parameters; the rest take their defaults.",
                         f"'{TOLERANCE_KEY}': the diagnosis's priors, relative (0.1 = +-10 %, one standard "
                         "deviation); edit or delete them.",
