@@ -75,3 +75,9 @@ def test_every_option_the_readme_names_exists():
 def test_the_check_sees_a_missing_option():
     assert "--split-gaps" in options_of(["estimate"]) and "--split-gaps" not in options_of(["diagnose"])
     assert "--engine" in options_of(["fleet", "estimate"])
+
+
+def test_simulates_shortest_duration_is_the_apis():
+    from hdjoint.api.functions import MIN_DURATION
+    from hdjoint.app import cli
+    assert cli.MIN_DURATION == MIN_DURATION

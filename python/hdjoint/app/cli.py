@@ -12,7 +12,7 @@ import sys
 
 from hdjoint.io.outputs import OutputError
 from hdjoint.jobs.inputs import UserError, check_output_file, locked_output, read_params as _params
-from hdjoint.fleet.cli import whole_number
+from hdjoint.fleet.cli import subcommand, whole_number
 from hdjoint.io.timebase import TIME_UNITS
 
 DESCRIPTION = ("Torque sensing for harmonic-drive robot joints: FMUs, simulation, torque estimation, diagnosis, "
@@ -128,13 +128,6 @@ def _time_unit_argument(p) -> None:
     p.add_argument("--current-sign", type=int, choices=(1, -1), default=1,
                    help="-1: the current i_m is logged against the encoders' positive sense (e.g. LARA8 joints 1 "
                         "and 2); it is negated as it is read (default: 1)")
-
-
-def subcommand(sub, name: str, summary: str, description: str, *examples: str) -> argparse.ArgumentParser:
-    """A subcommand with its one-line summary (in `hdjoint --help`), its description and examples (in its own)."""
-    return sub.add_parser(name, help=summary, description=f"{summary[0].upper()}{summary[1:]}. {description}",
-                          epilog="examples:\n" + "\n".join(f"  {e}" for e in examples),
-                          formatter_class=argparse.RawDescriptionHelpFormatter)
 
 
 def _version() -> str:

@@ -76,8 +76,9 @@ def whole_number(least: int):
     return parse
 
 
-def _parser(sub, name: str, summary: str, description: str, *examples: str):
-    """A subcommand with its summary, description and examples (as the main command line's)."""
+def subcommand(sub, name: str, summary: str, description: str, *examples: str):
+    """A subcommand with its one-line summary (in the parent's --help), its description and examples (in its
+    own); the main command line's too."""
     import argparse
     return sub.add_parser(name, help=summary, description=f"{summary[0].upper()}{summary[1:]}. {description}",
                           epilog="examples:\n" + "\n".join(f"  {e}" for e in examples),
@@ -86,25 +87,25 @@ def _parser(sub, name: str, summary: str, description: str, *examples: str):
 
 def register(sub) -> None:
     """Add `fleet` and its subcommands to the main parser's subparsers."""
-    fleet = _parser(sub, "fleet", "diagnose or estimate a fleet of recordings on Dask; fleet drift report",
+    fleet = subcommand(sub, "fleet", "diagnose or estimate a fleet of recordings on Dask; fleet drift report",
                     "Resumable: a recording done earlier is not run again (docs/fleet.md).",
                     "hdjoint fleet generate fleet-demo --joints 2 --days 3",
                     "hdjoint fleet diagnose \"logs/**/*.csv\" --params-map map.json --out fleet/")
     fsub = fleet.add_subparsers(dest="fleet_command", required=True)
-    p = _parser(fsub, "diagnose", "diagnose every recording (findings, corrected parameters, report each)",
+    p = subcommand(fsub, "diagnose", "diagnose every recording (findings, corrected parameters, report each)",
                 "Writes fleet.parquet (a row per recording), fleet.html (joints ranked by drift) and each "
                 "recording's diagnosis under OUT.",
                 "hdjoint fleet diagnose \"logs/**/*.csv\" --params-map map.json --out fleet/ --workers 2")
     _common(p)
     p.set_defaults(run=cmd_fleet)
-    p = _parser(fsub, "estimate", "torque estimates for every recording (and error figures vs the sensor)",
+    p = subcommand(fsub, "estimate", "torque estimates for every recording (and error figures vs the sensor)",
                 "Writes fleet.parquet, fleet.html and each recording's estimates.csv under OUT.",
                 "hdjoint fleet estimate \"logs/**/*.csv\" --out fleet-est/ --engine batch")
     _common(p)
     p.add_argument("--engine", choices=("fmu", "batch"), default="fmu",
                    help="JointTorqueEstimator.fmu through fmpy (default) or the native batch path")
     p.set_defaults(run=cmd_fleet)
-    p = _parser(fsub, "generate", "simulate a fleet with known drifts (for trying the fleet commands)",
+    p = subcommand(fsub, "generate", "simulate a fleet with known drifts (for trying the fleet commands)",
                 "Writes OUT/logs/<robot>/<joint>/<date>.csv, OUT/params/, OUT/params-map.json and OUT/truth.json "
                 "(which joints drift, in what).",
                 "hdjoint fleet generate fleet-demo --joints 2 --days 3 --duration 5")
