@@ -12,7 +12,7 @@ import sys
 
 from hdjoint.io.outputs import OutputError
 from hdjoint.jobs.inputs import UserError, check_output_file, locked_output, read_params as _params
-from hdjoint.fleet.cli import subcommand, whole_number
+from hdjoint.fleet.cli import help_formatter, subcommand, whole_number
 from hdjoint.io.timebase import TIME_UNITS
 
 DESCRIPTION = ("Torque sensing for harmonic-drive robot joints: FMUs, simulation, torque estimation, diagnosis, "
@@ -149,7 +149,7 @@ class _Version(argparse.Action):
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="hdjoint", description=DESCRIPTION,
                                  epilog="examples:\n  hdjoint demo --out hdjoint-demo\n  hdjoint estimate --help",
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+                                 formatter_class=help_formatter())
     ap.add_argument("--version", action=_Version, help="print the version and exit")
     sub = ap.add_subparsers(dest="command", required=True)
 

@@ -76,13 +76,24 @@ def whole_number(least: int):
     return parse
 
 
+def help_formatter():
+    """argparse's formatter, with the examples' lines kept as written (the description is wrapped as usual)."""
+    import argparse
+
+    class Help(argparse.HelpFormatter):
+        def _fill_text(self, text, width, indent):
+            if text.startswith("examples:"):
+                return "".join(indent + line for line in text.splitlines(keepends=True))
+            return super()._fill_text(text, width, indent)
+    return Help
+
+
 def subcommand(sub, name: str, summary: str, description: str, *examples: str):
     """A subcommand with its one-line summary (in the parent's --help), its description and examples (in its
     own); the main command line's too."""
-    import argparse
     return sub.add_parser(name, help=summary, description=f"{summary[0].upper()}{summary[1:]}. {description}",
                           epilog="examples:\n" + "\n".join(f"  {e}" for e in examples),
-                          formatter_class=argparse.RawDescriptionHelpFormatter)
+                          formatter_class=help_formatter())
 
 
 def register(sub) -> None:
