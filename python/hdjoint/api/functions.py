@@ -134,7 +134,7 @@ def _table(path: str) -> Any:
         import pandas as pd
     except ImportError:
         return np.genfromtxt(path, delimiter=",", names=True)
-    return pd.read_csv(path, index_col="time")
+    return pd.read_csv(path, index_col="time", float_precision="round_trip")  # the numbers as written
 
 
 def estimate(recording: RecordingLike, params: ParametersLike = None, *, engine: str = "fmu",
