@@ -128,13 +128,17 @@ def _name(rec: RecordingLike) -> str:
 
 
 def _table(path: str) -> Any:
-    """The estimates CSV as a pandas DataFrame indexed by time, else a numpy structured array."""
+    """The estimates CSV (numbers parsed exactly, as written) as a pandas DataFrame indexed by time, else a
+    numpy structured array."""
     import numpy as np
+    with open(path) as f:
+        header = f.readline().strip().split(",")
+    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
     try:
         import pandas as pd
     except ImportError:
-        return np.genfromtxt(path, delimiter=",", names=True)
-    return pd.read_csv(path, index_col="time", float_precision="round_trip")  # the numbers as written
+        return np.rec.fromarrays(data.T, names=header).view(np.ndarray)
+    return pd.DataFrame(data[:, 1:], index=pd.Index(data[:, 0], name="time"), columns=header[1:])
 
 
 def estimate(recording: RecordingLike, params: ParametersLike = None, *, engine: str = "fmu",
