@@ -179,11 +179,12 @@ def estimate(recording: RecordingLike, params: ParametersLike = None, *, engine:
 
 def diagnose(recordings: RecordingLike | Sequence[RecordingLike], params: ParametersLike = None, *,
              validate: Sequence[RecordingLike] = (), time_unit: str | None = None,
-             current_sign: float = 1.0) -> Diagnosis:
+             current_sign: float = 1.0, out: PathLike | None = None) -> Diagnosis:
     """What the model PARAMS leaves out of RECORDINGS (one, or several of one
     joint fitted jointly), as `hdjoint diagnose`: the verdict, findings, the
     corrected set and the report; VALIDATE are other recordings of the joint
-    the corrected model is checked on. Takes seconds to a minute.
+    the corrected model is checked on; OUT, a folder to keep the files in
+    (findings.json, params.json, params.ssv, report.html). Takes seconds to a minute.
 
     >>> import hdjoint
     >>> d = hdjoint.diagnose(hdjoint.simulate("paper", duration=4.0))
@@ -193,11 +194,11 @@ def diagnose(recordings: RecordingLike | Sequence[RecordingLike], params: Parame
     from hdjoint.jobs.diagnose import diagnose_to_directory
     with _Staged() as staged:
         paths = [staged.recording(r) for r in _recordings(recordings)]
-        out = staged.output("diagnosis")
-        diagnose_to_directory(paths, staged.params(params), out, [staged.recording(r) for r in validate],
-                              time_unit, current_sign)
-        found = Diagnosis.load(out)
-    return Diagnosis(found.document, found.corrected, found._report, [_name(r) for r in _recordings(recordings)])
+        folder = staged.output("diagnosis") if out is None else out
+        document = diagnose_to_directory(paths, staged.params(params), folder,
+                                         [staged.recording(r) for r in validate], time_unit, current_sign)
+        found = Diagnosis.load(folder)  # the corrected set and the report as written
+    return Diagnosis(document, found.corrected, found._report, [_name(r) for r in _recordings(recordings)])
 
 
 def calibrate(recordings: RecordingLike | Sequence[RecordingLike], params: ParametersLike = None, *,

@@ -88,9 +88,9 @@ def cmd_estimate(args) -> int:
 
 
 def cmd_diagnose(args) -> int:
-    from hdjoint.jobs.diagnose import diagnose_to_directory
-    doc = diagnose_to_directory(args.recording, args.params, args.out, args.validate, args.time_unit,
-                                args.current_sign)
+    from hdjoint.api import diagnose
+    doc = diagnose(args.recording, args.params, validate=args.validate, time_unit=args.time_unit,
+                   current_sign=args.current_sign, out=args.out).document
     for line in diagnosis_lines(doc):
         print(line)
     print(f"wrote {args.out}/findings.json, params.json, params.ssv, report.html ({doc['seconds']} s)")
