@@ -45,3 +45,48 @@ def test_a_finding_reads_as_one_line_with_units():
     assert "\n" not in text
     assert text == ("Finding(viscous_friction, added in the motor: Bm = 0.000152 N.m.s/rad (95 % 0.00013 to "
                     "0.000173 N.m.s/rad); held-out RMS 0.13 -> 0.0123 N.m; confidence 1.00)")
+
+
+def synthetic_diagnosis(tmp_path) -> "hdjoint.Diagnosis":
+    """A folder as `hdjoint diagnose --out` writes it, with one finding and the estimators' figures."""
+    import json
+    doc = {"verdict": "missing_physics", "recording": {"path": "bench.csv"},
+           "findings": [{"effect": "backlash", "kind": "added", "confidence": 0.97, "where": {"part": "gear"},
+                         "parameters": {"backlash": 2e-5}, "intervals": {"backlash": [1.8e-5, 2.2e-5]},
+                         "fit": {"holdout_rms_before": 0.185, "holdout_rms_after": 0.047}}],
+           "unexplained": [], "calibration": {"Kt": {}, "Kf": {}}, "beyond_tolerance": ["Kf"],
+           "estimator": {label: {"tau_compliance": {"rms": rms, "max": 2 * rms}, "tau_ukf": {"rms": rms, "max": rms}}
+                         for label, rms in (("nominal", 0.2), ("corrected", 0.05))},
+           "noise": {"motor": float("nan")}}
+    (tmp_path / "findings.json").write_text(json.dumps(doc))
+    hdjoint.Parameters({"backlash": 2e-5}).save(tmp_path / "params.json")
+    (tmp_path / "report.html").write_text("<html>report</html>")
+    return hdjoint.Diagnosis.load(tmp_path)
+
+
+def test_a_diagnosis_reads_in_words_and_writes_its_files(tmp_path):
+    import json
+    d = synthetic_diagnosis(tmp_path)
+    assert d.verdict == "missing_physics" and d.recordings == ["bench.csv"]
+    assert d.corrected["backlash"] == 2e-5 and d.corrected.stated == {"backlash": 2e-5}
+    assert repr(d).splitlines() == [
+        "Diagnosis(bench.csv: missing_physics",
+        "  Finding(backlash, added in the gear: backlash = 2e-05 rad (95 % 1.8e-05 to 2.2e-05 rad); held-out RMS "
+        "0.185 -> 0.047 N.m; confidence 0.97)",
+        "  .corrected: 2 parameters calibrated, beyond their tolerance: Kf)"]
+    html = d._repr_html_()
+    assert "verdict: missing_physics" in html and "backlash" in html and "<table>" in html
+    assert json.loads(d.to_json())["noise"]["motor"] is None  # strict JSON, as findings.json
+    assert d.report(tmp_path / "copy.html").read_text() == "<html>report</html>"
+
+
+def test_a_diagnosis_plots_its_findings_and_estimators():
+    import matplotlib
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+    import tempfile
+    from pathlib import Path
+    with tempfile.TemporaryDirectory() as folder:
+        fig = synthetic_diagnosis(Path(folder)).plot()
+    assert isinstance(fig, Figure) and len(fig.axes) == 2
+    assert fig.axes[0].get_title() == "verdict: missing_physics"
