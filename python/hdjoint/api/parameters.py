@@ -183,7 +183,7 @@ class Parameters(Mapping[str, float]):
         partial file), or with DOCUMENTED every value with its unit, range,
         description and the diagnosis's tolerance (`hdjoint params`)."""
         if documented:
-            table_io.save_documented(path, self.to_dict(), self.tolerance)
+            table_io.save_documented(path, self.to_dict(), self.tolerance, set(self._stated))
             return
         content = self.file_content()
         table_io.save(path, self._stated, {k: v for k, v in content.items() if k not in self._stated})

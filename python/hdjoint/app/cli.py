@@ -50,15 +50,15 @@ def cmd_params(args) -> int:
         check_output_file(args.output, inputs=(args.params,))
     values = _params(args.params)  # the defaults, or a file's set with the defaults for the rest
     try:
-        tolerance = parameters.load_tolerances(args.params)
+        tolerance, keep = parameters.load_tolerances(args.params), parameters.stated(args.params)
     except parameters.ParameterError as e:
         raise UserError(str(e)) from None
     if args.output is None:
         import json
-        print(json.dumps(parameters.documented(values, tolerance), indent=2))
+        print(json.dumps(parameters.documented(values, tolerance, keep), indent=2))
         return 0
     with locked_output(args.output):
-        parameters.save_documented(args.output, values, tolerance)
+        parameters.save_documented(args.output, values, tolerance, keep)
     print(f"wrote {args.output}: {len(values)} parameters with units, ranges, descriptions and the diagnosis's "
           f"tolerances; edit it and pass it as --params")
     return 0

@@ -276,12 +276,19 @@ def check_documentation(data: dict, source: str = "parameter set") -> None:
                                  f"{info[name].unit!r} (convert the value, then the unit)")
 
 
-def documented(params: dict[str, float] | None = None, tolerance: dict[str, float] | None = None) -> dict:
-    """PARAMS (None: the defaults) as a documented parameter file: every parameter's value, the relative
-    tolerances (the table's priors, overridden by TOLERANCE), and each parameter's unit, range, description and
-    prior; `load` reads it back as the same set."""
+# What `hdjoint estimate` takes from each recording unless a parameter file sets it: a documented file leaves
+# them out (unless its source set them), so it serves recordings of any rate and jitter.
+FROM_THE_RECORDING = {"Ts": "the recording's median step", "jsf_r_time": "measured on the recording"}
+
+
+def documented(params: dict[str, float] | None = None, tolerance: dict[str, float] | None = None,
+               keep: set[str] | frozenset[str] = frozenset()) -> dict:
+    """PARAMS (None: the defaults) as a documented parameter file: every parameter's value (but
+    FROM_THE_RECORDING's, unless named in KEEP), the relative tolerances (the table's priors, overridden by
+    TOLERANCE), and each parameter's unit, range, description and prior; `load` reads it back as the same set."""
     info = table()
-    values = {**defaults(), **check(params or {})}
+    values = {name: value for name, value in {**defaults(), **check(params or {})}.items()
+              if name not in FROM_THE_RECORDING or name in keep}
     stated_tolerance = check_tolerances(tolerance or {})
     priors = {name: stated_tolerance.get(name, p.tolerance_relative) for name, p in info.items()
               if p.calibrated() and TOLERANCE_RANGE[0] <= stated_tolerance.get(name, p.tolerance_relative)
@@ -298,7 +305,8 @@ def documented(params: dict[str, float] | None = None, tolerance: dict[str, floa
         return f"{100 * priors[name]:g} % (1 sigma){absolute}{source}"
 
     return {ABOUT_KEY: ["An hdjoint parameter set (docs/estimators.md): name: value in SI units.",
-                        "A file may set only some parameters; the rest take their defaults.",
+                        "A file may set only some parameters; the rest take their defaults. Left out unless "
+                        "set: " + ", ".join(f"{n} ({why})" for n, why in FROM_THE_RECORDING.items()) + ".",
                         f"'{TOLERANCE_KEY}': the diagnosis's priors, relative (0.1 = +-10 %, one standard "
                         "deviation); edit or delete them.",
                         f"Optional: '{ACCURACY_KEY}' (N.m RMS the verdict asks for), '{SENSOR_NOISE_KEY}' "
@@ -307,14 +315,16 @@ def documented(params: dict[str, float] | None = None, tolerance: dict[str, floa
             **values,
             TOLERANCE_KEY: priors,
             DOCUMENTATION_KEY: {name: {"unit": p.unit, "range": [p.min, p.max], "default": p.default,
-                                       "scope": p.scope, "description": p.description, "prior": prior(name)}
+                                       "scope": p.scope, "description": p.description, "prior": prior(name),
+                                       **({"left_out": f"{FROM_THE_RECORDING[name]} unless set here"}
+                                          if name not in values else {})}
                                 for name, p in info.items()}}
 
 
 def save_documented(path: str | os.PathLike, params: dict[str, float] | None = None,
-                    tolerance: dict[str, float] | None = None) -> None:
-    """Write `documented(PARAMS, TOLERANCE)` as JSON, atomically."""
-    _atomic_write(path, json.dumps(documented(params, tolerance), indent=2) + "\n")
+                    tolerance: dict[str, float] | None = None, keep: set[str] | frozenset[str] = frozenset()) -> None:
+    """Write `documented(PARAMS, TOLERANCE, KEEP)` as JSON, atomically."""
+    _atomic_write(path, json.dumps(documented(params, tolerance, keep), indent=2) + "\n")
 
 
 def load(path: str | os.PathLike | None) -> dict[str, float]:
