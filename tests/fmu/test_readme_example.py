@@ -1,7 +1,9 @@
-"""The README's fmpy example runs as written, on both FMI versions: one
-output row per sample (a master that took the FMU's own step would give far
-fewer), the torque hdjoint's own FMU runner computes sample by sample, and
-FMI 3.0 equal to FMI 2.0."""
+"""The README's fmpy example runs as written, on both FMI versions, and its
+rows are `hdjoint estimate`'s: at equal time stamps the same tau_ukf and
+tau_hat. An output read at a communication point t describes the last sample
+the step ran, t - Ts (fmpy records it at t, after the step from t - Ts), and
+the example says so and shifts its rows; one output row per sample (a master
+that took the FMU's own step would give far fewer); FMI 3.0 equal to FMI 2.0."""
 from __future__ import annotations
 
 import re
@@ -10,10 +12,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from hdjoint.app.cli import main
 from hdjoint.fmu import experiments
-from hdjoint.io import parameters
-from hdjoint.fmu.runner import run_estimator_fmu
-from hdjoint.io.recording import read_recording, write_recording
+from hdjoint.io.recording import write_recording
 
 README = Path(__file__).resolve().parents[2] / "README.md"
 
@@ -43,17 +44,30 @@ def run_snippet(folder, monkeypatch, fmi):
     return scope["result"]
 
 
-def test_readme_example_runs_as_written_on_both_fmi_versions(paper_csv, monkeypatch):
+def test_readme_example_gives_hdjoint_estimates_rows_at_their_time_stamps(paper_csv, monkeypatch, capsys):
     folder, rec = paper_csv
     results = [run_snippet(folder, monkeypatch, fmi) for fmi in (2, 3)]
-    written = read_recording(str(folder / "paper.csv"))
-    expected = run_estimator_fmu(written.time, written.i_m, written.theta_m, written.theta_l,
-                                 parameters.for_estimator(parameters.defaults()))
+    assert main(["estimate", str(folder / "paper.csv"), "-o", str(folder / "est.csv")]) == 0, capsys.readouterr().err
+    expected = np.genfromtxt(folder / "est.csv", delimiter=",", names=True)
     for result in results:
-        assert len(result) == len(rec.time)  # one row per 1 ms sample
-        np.testing.assert_allclose(result["time"], rec.time, atol=1e-9)
+        assert len(result) == len(rec.time)  # one row per 1 ms sample, every sample
+        # equal time stamps: the same instants, to the time column's round-off
+        np.testing.assert_allclose(result["time"], expected["time"], rtol=0, atol=1e-9)
         for name in ("tau_ukf", "tau_hat"):
-            # fmpy's row at t holds the outputs of the step that ends at t: the sample before.
-            np.testing.assert_allclose(result[name][1:], expected[name][:-1], rtol=0, atol=1e-9)
+            np.testing.assert_allclose(result[name], expected[name], rtol=0, atol=1e-9)
     for name in ("tau_ukf", "tau_hat"):
         assert np.array_equal(results[0][name], results[1][name])
+
+
+def test_the_readme_says_which_instant_an_output_describes():
+    text = README.read_text()
+    assert "communication point t describe" in text and "t - Ts" in text
+
+
+@pytest.mark.parametrize("fmi", (2, 3))
+def test_the_fmus_documentation_says_which_instant_an_output_describes(fmi):
+    import zipfile
+    from hdjoint.fmu.shipped import fmu_path
+    with zipfile.ZipFile(fmu_path("JointTorqueEstimator", fmi)) as z:
+        html = z.read("documentation/index.html").decode("utf-8")
+    assert "<h2>Timing</h2>" in html and "describe the sample at <code>t - Ts</code>" in html

@@ -9,7 +9,7 @@ import hdjoint
 PACKAGE = Path(hdjoint.__file__).resolve().parent
 # Bottom to top. A module may import its own layer and the layers below it.
 LAYERS = ("hdjoint._core", "hdjoint.io", "hdjoint.fmu", "hdjoint.estimation", "hdjoint.diagnosis",
-          "hdjoint.jobs", "hdjoint.fleet", "hdjoint.app")
+          "hdjoint.jobs", "hdjoint.fleet", "hdjoint.api", "hdjoint.app")
 # Helpers of the tests and benchmarks, never shipped.
 NOT_SHIPPED = ("truth", "tuning")
 

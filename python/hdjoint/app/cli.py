@@ -6,53 +6,61 @@ Heavy modules are imported inside the subcommands, so `hdjoint --help` is quick.
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import signal
 import sys
 
 from hdjoint.io.outputs import OutputError
 from hdjoint.jobs.inputs import UserError, check_output_file, locked_output, read_params as _params
-from hdjoint.fleet.cli import whole_number
+from hdjoint.fleet.cli import help_formatter, subcommand, whole_number
 from hdjoint.io.timebase import TIME_UNITS
 
 DESCRIPTION = ("Torque sensing for harmonic-drive robot joints: FMUs, simulation, torque estimation, diagnosis, "
                "fleets. Exit code 0 on success, 2 for bad input or an output that must not be written, 1 for a "
                "failure while running, 130/143 when stopped by SIGINT/SIGTERM (docs/robustness.md).")
-# The shortest recording simulate writes: ten samples at 1 kHz (the readers need two rows, a fit more).
+# The shortest recording simulate writes (hdjoint.api.functions.MIN_DURATION), for the help text.
 MIN_DURATION = 0.01
 
 
 def cmd_fmus(args) -> int:
-    from hdjoint.fmu.shipped import FMI_VERSIONS, export_fmus
+    from hdjoint.api import export_fmus
+    from hdjoint.fmu.shipped import FMI_VERSIONS
     versions = FMI_VERSIONS if args.fmi == "both" else (int(args.fmi),)
     for path in export_fmus(args.out, versions):
         print(path)
     return 0
 
 
-def _check_simulate(args, experiments) -> None:
-    if args.experiment not in experiments.EXPERIMENTS:
-        raise UserError(f"--experiment {args.experiment}: unknown; known: {', '.join(experiments.EXPERIMENTS)}")
-    if args.duration is not None:
-        longest = experiments.EXPERIMENTS[args.experiment].duration
-        if not math.isfinite(args.duration) or not MIN_DURATION <= args.duration <= longest:
-            raise UserError(f"--duration {args.duration:g}: must be from {MIN_DURATION:g} s to the experiment's "
-                            f"length, {longest:g} s ({args.experiment}); leave it out for the whole experiment")
-
-
 def cmd_simulate(args) -> int:
-    from hdjoint.fmu import experiments
-    from hdjoint.io.recording import write_recording
-    _check_simulate(args, experiments)
+    from hdjoint.api.functions import check_experiment, simulate
+    check_experiment(args.experiment, args.duration)
     check_output_file(args.output, inputs=(args.params, args.joint))  # before any work
     nominal = _params(args.params)
-    joint = _params(args.joint) if args.joint else experiments.true_joint_parameters(nominal)
+    joint = _params(args.joint) if args.joint else None
     with locked_output(args.output):
-        rec = experiments.run(args.experiment, joint=joint, nominal=nominal, duration=args.duration,
-                              sensors=experiments.Sensors(seed=args.seed))
-        write_recording(args.output, rec)
+        rec = simulate(args.experiment, params=nominal, joint=joint, duration=args.duration, seed=args.seed)
+        rec.save(args.output)
     print(f"{args.output}: {len(rec)} samples, {rec.duration:.3f} s ({args.experiment})")
+    return 0
+
+
+def cmd_params(args) -> int:
+    from hdjoint.io import parameters
+    if args.output:
+        check_output_file(args.output, inputs=(args.params,))
+    values = _params(args.params)  # the defaults, or a file's set with the defaults for the rest
+    try:
+        tolerance, keep = parameters.load_tolerances(args.params), parameters.stated(args.params)
+    except parameters.ParameterError as e:
+        raise UserError(str(e)) from None
+    if args.output is None:
+        import json
+        print(json.dumps(parameters.documented(values, tolerance, keep), indent=2))
+        return 0
+    with locked_output(args.output):
+        parameters.save_documented(args.output, values, tolerance, keep)
+    print(f"wrote {args.output}: {len(values)} parameters with units, ranges, descriptions and the diagnosis's "
+          f"tolerances; edit it and pass it as --params")
     return 0
 
 
@@ -80,9 +88,9 @@ def cmd_estimate(args) -> int:
 
 
 def cmd_diagnose(args) -> int:
-    from hdjoint.jobs.diagnose import diagnose_to_directory
-    doc = diagnose_to_directory(args.recording, args.params, args.out, args.validate, args.time_unit,
-                                args.current_sign)
+    from hdjoint.api import diagnose
+    doc = diagnose(args.recording, args.params, validate=args.validate, time_unit=args.time_unit,
+                   current_sign=args.current_sign, out=args.out).document
     for line in diagnosis_lines(doc):
         print(line)
     print(f"wrote {args.out}/findings.json, params.json, params.ssv, report.html ({doc['seconds']} s)")
@@ -122,17 +130,43 @@ def _time_unit_argument(p) -> None:
                         "and 2); it is negated as it is read (default: 1)")
 
 
+def _version() -> str:
+    import hdjoint
+    return f"hdjoint {hdjoint.__version__}"
+
+
+class _Version(argparse.Action):
+    """--version, with the version looked up only when asked (importlib.metadata costs time)."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS, help=None):
+        super().__init__(option_strings, dest=dest, default=default, nargs=0, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(_version())
+        parser.exit()
+
+
 def build_parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="hdjoint", description=DESCRIPTION)
+    ap = argparse.ArgumentParser(prog="hdjoint", description=DESCRIPTION,
+                                 epilog="examples:\n  hdjoint demo --out hdjoint-demo\n  hdjoint estimate --help",
+                                 formatter_class=help_formatter())
+    ap.add_argument("--version", action=_Version, help="print the version and exit")
     sub = ap.add_subparsers(dest="command", required=True)
 
-    p = sub.add_parser("fmus", help="write every FMU the project builds into a directory")
+    p = subcommand(sub, "fmus", "write every FMU the project builds into a directory",
+                   "JointTorqueEstimator, HarmonicDriveJoint and JointController, each as FMI 2.0 (NAME.fmu) and "
+                   "FMI 3.0 (NAME_fmi3.fmu) Co-Simulation; each carries its sources and documentation.",
+                   "hdjoint fmus --out fmus/", "hdjoint fmus --out fmus/ --fmi 3")
     p.add_argument("--out", required=True, help="target directory")
     p.add_argument("--fmi", choices=("2", "3", "both"), default="both",
                    help="FMI version: 2 (NAME.fmu), 3 (NAME_fmi3.fmu) or both (default)")
     p.set_defaults(run=cmd_fmus)
 
-    p = sub.add_parser("simulate", help="run the joint FMU on a built-in experiment, write a recording")
+    p = subcommand(sub, "simulate", "run the joint FMU on a built-in experiment, write a recording",
+                   "The joint under the built-in position controller; the recording has the contract's columns "
+                   "and tau_sensor (the transmitted torque with sensor noise).",
+                   "hdjoint simulate --experiment paper -o paper.csv",
+                   "hdjoint simulate --experiment multisine --duration 10 --joint joint.json -o bench.csv")
     p.add_argument("--experiment", default="paper",
                    help="built-in experiment: paper, paper_repeated, multisine, sweep or chirp (default: paper)")
     p.add_argument("--params", help="nominal parameter set (JSON) the controller assumes")
@@ -144,7 +178,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", required=True, help="recording to write (CSV)")
     p.set_defaults(run=cmd_simulate)
 
-    p = sub.add_parser("estimate", help="torque estimates on a recording")
+    p = subcommand(sub, "estimate", "torque estimates on a recording",
+                   "One row per sample: tau_ukf (the paper's UKF), tau_compliance, tau_hat (joint-state filter), "
+                   "their deviations, ...; RMS and max error printed when the recording has tau_sensor "
+                   "(docs/estimators.md).",
+                   "hdjoint estimate paper.csv --params joint.json -o est.csv",
+                   "hdjoint estimate run.csv --calibrate-from bench.csv -o est.csv")
     p.add_argument("recording")
     p.add_argument("--params", help="parameter set (JSON)")
     p.add_argument("--engine", choices=("fmu", "batch"), default="fmu",
@@ -165,7 +204,12 @@ def build_parser() -> argparse.ArgumentParser:
                         "writes OUTPUT's .params.json and .calibration.json beside it")
     p.set_defaults(run=cmd_estimate)
 
-    p = sub.add_parser("diagnose", help="locate and name what the model leaves out of a recording")
+    p = subcommand(sub, "diagnose", "locate and name what the model leaves out of a recording",
+                   "Calibrates the model, tests each effect it lacks on held-out data, and writes the findings, "
+                   "the corrected set and a report (docs/diagnosis.md). A recording with a gap is refused: split "
+                   "it at the gap.",
+                   "hdjoint diagnose bench.csv --params joint.json --out diag/",
+                   "hdjoint diagnose a.csv b.csv --out diag/ --validate c.csv")
     p.add_argument("recording", nargs="+",
                    help="one recording, or several of the same joint (their shared parameters are fitted jointly)")
     p.add_argument("--params", help="the nominal parameter set (JSON; an optional \"tolerance\" object "
@@ -176,8 +220,20 @@ def build_parser() -> argparse.ArgumentParser:
     _time_unit_argument(p)
     p.set_defaults(run=cmd_diagnose)
 
-    p = sub.add_parser("demo", help="the main job on built-in data: FMUs, the paper's table, a hidden effect named without a "
-                       "torque sensor and closed on a second recording (index.html)")
+    p = subcommand(sub, "params", "write a documented parameter file",
+                   "Every parameter's value with its unit, range, description and the diagnosis's tolerance, in "
+                   "the form --params reads back (docs/estimators.md); from the defaults, or a partial file "
+                   "completed with them.",
+                   "hdjoint params --defaults -o joint.json", "hdjoint params --params mine.json -o full.json")
+    given = p.add_mutually_exclusive_group(required=True)
+    given.add_argument("--defaults", action="store_true", help="the default set (the paper's joint)")
+    given.add_argument("--params", help="a parameter file (JSON), completed with the defaults")
+    p.add_argument("-o", "--output", help="file to write (default: print to standard output)")
+    p.set_defaults(run=cmd_params)
+
+    p = subcommand(sub, "demo", "the main job on built-in data: FMUs, the paper's table, a hidden effect named without a "
+                   "torque sensor and closed on a second recording (index.html)",
+                   "Takes a few minutes on 2 cores; open OUT/index.html.", "hdjoint demo --out hdjoint-demo")
     p.add_argument("--out", default="hdjoint-demo", help="output directory (default: hdjoint-demo)")
     p.set_defaults(run=cmd_demo)
 

@@ -76,19 +76,50 @@ def whole_number(least: int):
     return parse
 
 
+def help_formatter():
+    """argparse's formatter, with the examples' lines kept as written (the description is wrapped as usual)."""
+    import argparse
+
+    class Help(argparse.HelpFormatter):
+        def _fill_text(self, text, width, indent):
+            if text.startswith("examples:"):
+                return "".join(indent + line for line in text.splitlines(keepends=True))
+            return super()._fill_text(text, width, indent)
+    return Help
+
+
+def subcommand(sub, name: str, summary: str, description: str, *examples: str):
+    """A subcommand with its one-line summary (in the parent's --help), its description and examples (in its
+    own); the main command line's too."""
+    return sub.add_parser(name, help=summary, description=f"{summary[0].upper()}{summary[1:]}. {description}",
+                          epilog="examples:\n" + "\n".join(f"  {e}" for e in examples),
+                          formatter_class=help_formatter())
+
+
 def register(sub) -> None:
     """Add `fleet` and its subcommands to the main parser's subparsers."""
-    fleet = sub.add_parser("fleet", help="diagnose or estimate a fleet of recordings on Dask; fleet drift report")
+    fleet = subcommand(sub, "fleet", "diagnose or estimate a fleet of recordings on Dask; fleet drift report",
+                    "Resumable: a recording done earlier is not run again (docs/fleet.md).",
+                    "hdjoint fleet generate fleet-demo --joints 2 --days 3",
+                    "hdjoint fleet diagnose \"logs/**/*.csv\" --params-map map.json --out fleet/")
     fsub = fleet.add_subparsers(dest="fleet_command", required=True)
-    p = fsub.add_parser("diagnose", help="diagnose every recording (findings, corrected parameters, report each)")
+    p = subcommand(fsub, "diagnose", "diagnose every recording (findings, corrected parameters, report each)",
+                "Writes fleet.parquet (a row per recording), fleet.html (joints ranked by drift) and each "
+                "recording's diagnosis under OUT.",
+                "hdjoint fleet diagnose \"logs/**/*.csv\" --params-map map.json --out fleet/ --workers 2")
     _common(p)
     p.set_defaults(run=cmd_fleet)
-    p = fsub.add_parser("estimate", help="torque estimates for every recording (and error figures vs the sensor)")
+    p = subcommand(fsub, "estimate", "torque estimates for every recording (and error figures vs the sensor)",
+                "Writes fleet.parquet, fleet.html and each recording's estimates.csv under OUT.",
+                "hdjoint fleet estimate \"logs/**/*.csv\" --out fleet-est/ --engine batch")
     _common(p)
     p.add_argument("--engine", choices=("fmu", "batch"), default="fmu",
                    help="JointTorqueEstimator.fmu through fmpy (default) or the native batch path")
     p.set_defaults(run=cmd_fleet)
-    p = fsub.add_parser("generate", help="simulate a fleet with known drifts (for trying the fleet commands)")
+    p = subcommand(fsub, "generate", "simulate a fleet with known drifts (for trying the fleet commands)",
+                "Writes OUT/logs/<robot>/<joint>/<date>.csv, OUT/params/, OUT/params-map.json and OUT/truth.json "
+                "(which joints drift, in what).",
+                "hdjoint fleet generate fleet-demo --joints 2 --days 3 --duration 5")
     p.add_argument("out", help="target directory")
     p.add_argument("--joints", type=whole_number(1), default=4, help="number of joints (default: 4)")
     p.add_argument("--days", type=whole_number(1), default=6, help="recordings per joint, one a day (default: 6)")

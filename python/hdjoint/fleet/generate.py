@@ -65,7 +65,7 @@ def generate(out: str | Path, joints: int = 4, days: int = 6, duration: float = 
                                   sensors=experiments.Sensors(seed=1000 * k + day))
             write_recording(path, rec)
             if progress:
-                progress(f"{path.relative_to(out)}")
+                progress(str(path))  # the path as written (OUT/logs/...), not relative to OUT
     (out / "truth.json").write_text(json.dumps({"drifts": truth_doc, "joint_pattern": JOINT_PATTERN}, indent=2))
     map_path = out / "params-map.json"
     map_path.write_text(json.dumps(pmap, indent=2) + "\n")

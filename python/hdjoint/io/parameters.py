@@ -250,14 +250,95 @@ def check_sensor_noise(stated, source: str = "parameter set") -> dict[str, float
     return {column: float(value) for column, value in stated.items()}
 
 
+# A documented parameter file (`hdjoint params --defaults`) also carries "about" (how to edit it, text) and
+# "documentation" ({name: {"unit", "range", "description", "prior"}}): read back, the units are checked against
+# the table and the rest is ignored.
+ABOUT_KEY = "about"
+DOCUMENTATION_KEY = "documentation"
+NOT_PARAMETERS = (TOLERANCE_KEY, ACCURACY_KEY, SENSOR_NOISE_KEY, ABOUT_KEY, DOCUMENTATION_KEY)
+
+
+def check_documentation(data: dict, source: str = "parameter set") -> None:
+    """A documented file's "about" is text and its "documentation" names known parameters in their table units."""
+    about = data.get(ABOUT_KEY, "")
+    if not (isinstance(about, str) or isinstance(about, list) and all(isinstance(a, str) for a in about)):
+        raise ParameterError(f"{source}: '{ABOUT_KEY}' must be text (or a list of lines)")
+    documentation = data.get(DOCUMENTATION_KEY, {})
+    if not isinstance(documentation, dict):
+        raise ParameterError(f"{source}: '{DOCUMENTATION_KEY}' must be an object of name: {{unit, description, ...}}")
+    info = table()
+    for name, entry in documentation.items():
+        if name not in info:
+            raise ParameterError(f"{source}: '{DOCUMENTATION_KEY}' names an unknown parameter '{name}'")
+        unit = entry.get("unit", info[name].unit) if isinstance(entry, dict) else info[name].unit
+        if unit != info[name].unit:
+            raise ParameterError(f"{source}: '{DOCUMENTATION_KEY}' gives '{name}' in {unit!r}; hdjoint takes it in "
+                                 f"{info[name].unit!r} (convert the value, then the unit)")
+
+
+# What `hdjoint estimate` takes from each recording unless a parameter file sets it: a documented file leaves
+# them out (unless its source set them), so it serves recordings of any rate and jitter.
+FROM_THE_RECORDING = {"Ts": "the recording's median step", "jsf_r_time": "measured on the recording"}
+
+
+def documented(params: dict[str, float] | None = None, tolerance: dict[str, float] | None = None,
+               keep: set[str] | frozenset[str] = frozenset()) -> dict:
+    """PARAMS (None: the defaults) as a documented parameter file: every parameter's value (but
+    FROM_THE_RECORDING's, unless named in KEEP), the relative tolerances (the table's priors, overridden by
+    TOLERANCE), and each parameter's unit, range, description and prior; `load` reads it back as the same set."""
+    info = table()
+    values = {name: value for name, value in {**defaults(), **check(params or {})}.items()
+              if name not in FROM_THE_RECORDING or name in keep}
+    stated_tolerance = check_tolerances(tolerance or {})
+    priors = {name: stated_tolerance.get(name, p.tolerance_relative) for name, p in info.items()
+              if p.calibrated() and TOLERANCE_RANGE[0] <= stated_tolerance.get(name, p.tolerance_relative)
+              <= TOLERANCE_RANGE[1]}
+
+    def prior(name: str) -> str:
+        p = info[name]
+        if not p.calibrated():
+            return "not calibrated by the diagnosis"
+        source = f" ({p.tolerance_source})" if p.tolerance_source else ""
+        if name not in priors:
+            return f"{p.tolerance_absolute:g}{unit_in_text(p.unit)} (1 sigma, absolute){source}"
+        absolute = f", at least {p.tolerance_absolute:g}{unit_in_text(p.unit)}" if p.tolerance_absolute > 0 else ""
+        return f"{100 * priors[name]:g} % (1 sigma){absolute}{source}"
+
+    return {ABOUT_KEY: ["An hdjoint parameter set (docs/estimators.md): name: value in SI units.",
+                        "A file may set only some parameters; the rest take their defaults. Left out unless "
+                        "set: " + ", ".join(f"{n} ({why})" for n, why in FROM_THE_RECORDING.items()) + ".",
+                        f"'{TOLERANCE_KEY}': the diagnosis's priors, relative (0.1 = +-10 %, one standard "
+                        "deviation); edit or delete them.",
+                        f"Optional: '{ACCURACY_KEY}' (N.m RMS the verdict asks for), '{SENSOR_NOISE_KEY}' "
+                        "({\"i_m\": A RMS, \"tau_sensor\": N.m RMS}).",
+                        f"'{DOCUMENTATION_KEY}' is read only for its units, which must stay the table's."],
+            **values,
+            TOLERANCE_KEY: priors,
+            DOCUMENTATION_KEY: {name: {"unit": p.unit, "range": [p.min, p.max], "default": p.default,
+                                       "scope": p.scope, "description": p.description, "prior": prior(name),
+                                       **({"left_out": f"{FROM_THE_RECORDING[name]} unless set here"}
+                                          if name not in values else {})}
+                                for name, p in info.items()}}
+
+
+def save_documented(path: str | os.PathLike, params: dict[str, float] | None = None,
+                    tolerance: dict[str, float] | None = None, keep: set[str] | frozenset[str] = frozenset()) -> None:
+    """Write `documented(PARAMS, TOLERANCE, KEEP)` as JSON, atomically."""
+    _atomic_write(path, json.dumps(documented(params, tolerance, keep), indent=2) + "\n")
+
+
 def load(path: str | os.PathLike | None) -> dict[str, float]:
     """Defaults overridden by a JSON parameter file (None: defaults only).
     Its optional "tolerance", "accuracy" and "sensor_noise" entries are
-    checked here and read by load_statements."""
+    checked here and read by load_statements; "about" and "documentation"
+    (a documented file's) are checked and otherwise ignored."""
     params = defaults()
     if path is None:
         return params
     data = _read_json(path)
+    check_documentation(data, str(path))
+    data.pop(ABOUT_KEY, None)
+    data.pop(DOCUMENTATION_KEY, None)
     check_tolerances(data.pop(TOLERANCE_KEY, {}), str(path))
     check_accuracy(data.pop(ACCURACY_KEY, None), str(path))
     check_sensor_noise(data.pop(SENSOR_NOISE_KEY, {}), str(path))
@@ -269,7 +350,7 @@ def stated(path: str | os.PathLike | None) -> set[str]:
     """The parameters a file sets itself (the rest of a loaded set are defaults); none for None."""
     if path is None:
         return set()
-    return set(_read_json(path)) - {TOLERANCE_KEY, ACCURACY_KEY, SENSOR_NOISE_KEY}
+    return set(_read_json(path)) - set(NOT_PARAMETERS)
 
 
 def load_statements(path: str | os.PathLike | None) -> dict:
@@ -308,9 +389,14 @@ def _atomic_write(path: str | os.PathLike, text: str) -> None:
         raise
 
 
-def save(path: str | os.PathLike, params: dict[str, float]) -> None:
-    """Write a parameter set as JSON (contract format), atomically."""
-    _atomic_write(path, json.dumps(check(params), indent=2) + "\n")
+def save(path: str | os.PathLike, params: dict[str, float], statements: dict | None = None) -> None:
+    """Write a parameter set as JSON (contract format), atomically, with STATEMENTS ("tolerance", "accuracy",
+    "sensor_noise", checked) after the values."""
+    statements = dict(statements or {})
+    check_tolerances(statements.get(TOLERANCE_KEY, {}))
+    check_accuracy(statements.get(ACCURACY_KEY))
+    check_sensor_noise(statements.get(SENSOR_NOISE_KEY, {}))
+    _atomic_write(path, json.dumps({**check(params), **statements}, indent=2) + "\n")
 
 
 def save_ssv(path: str | os.PathLike, params: dict[str, float], name: str = "hdjoint") -> None:

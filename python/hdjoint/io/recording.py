@@ -113,6 +113,20 @@ class Recording:
     def __len__(self) -> int:
         return len(self.time)
 
+    def __repr__(self) -> str:
+        n = len(self)
+        rate = ""
+        if n > 1:
+            hz = round(1.0 / self.median_step, 6)
+            rate = f" at {hz / 1000:g} kHz" if hz >= 1000 else f" at {hz:g} Hz"
+        names = list(self.columns())
+        shown = ", ".join(names[:5]) + (", ..." if len(names) > 5 else "")
+        return f"Recording({self.path or 'in memory'}: {n} samples, {self.duration:.4g} s{rate}; {shown})"
+
+    def save(self, path) -> None:
+        """Write the recording as a contract CSV (write_recording)."""
+        write_recording(path, self)
+
     @property
     def duration(self) -> float:
         """Time from the first to the last sample, s."""
