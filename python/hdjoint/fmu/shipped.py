@@ -38,16 +38,17 @@ def export_fmus(out_dir: str | Path, fmi: tuple[int, ...] = FMI_VERSIONS) -> lis
     """Copy every FMU of the FMI versions `fmi` into out_dir (each through a
     temporary file, never over a device node, a FIFO or a read-only file);
     returns the written paths."""
-    from hdjoint.io.outputs import check_replaceable, replace_into, temp_path
+    from hdjoint.io.outputs import check_replaceable, open_temp, replace_into
     out = Path(out_dir)
     pairs = [(name, version, out / fmu_file_name(name, version)) for version in fmi for name in FMU_NAMES]
     for _, _, target in pairs:
         check_replaceable(target)  # before anything is written
     out.mkdir(parents=True, exist_ok=True)
     for name, version, target in pairs:
-        tmp = temp_path(target)
+        f, tmp = open_temp(target, binary=True)
         try:
-            shutil.copyfile(fmu_path(name, version), tmp)
+            with f, open(fmu_path(name, version), "rb") as src:
+                shutil.copyfileobj(src, f)
             replace_into(tmp, target)
         finally:
             Path(tmp).unlink(missing_ok=True)

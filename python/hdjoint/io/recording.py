@@ -21,7 +21,7 @@ from typing import Iterable, Iterator, Mapping, Sequence
 
 import numpy as np
 
-from hdjoint.io.outputs import check_replaceable, replace_into, sweep_debris, temp_path, write_error
+from hdjoint.io.outputs import check_replaceable, open_temp, replace_into, sweep_debris, write_error
 
 REQUIRED_COLUMNS = ("time", "i_m", "theta_m", "theta_l")
 OPTIONAL_COLUMNS = ("tau_sensor",)
@@ -439,21 +439,16 @@ class CsvWriter:
         self.path = os.fspath(path)
         self.names = list(names)
         sweep_debris(self.path)  # what a run killed outright (SIGKILL) left behind
-        self._tmp = temp_path(self.path)
         try:
-            # O_EXCL: never clobber a stranger's file; 0o666 lets the umask
-            # decide the final permissions, as for a normally created file.
-            fd = os.open(self._tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+            # O_EXCL and O_NOFOLLOW: never a stranger's file or a link; 0o666 lets
+            # the umask decide the final permissions, as for a normally created file.
+            self._file, self._tmp = open_temp(self.path)
         except OSError as exc:
             raise write_error(self.path, exc) from None
         try:  # from here the temporary file is ours to remove, even if a signal stops us before `with` is entered
-            self._file = open(fd, "w", newline="", encoding="utf-8")
             self._writer = csv.writer(self._file, lineterminator="\n")
             self._guard(self._writer.writerow, self.names)
         except BaseException:
-            if not hasattr(self, "_file"):
-                os.close(fd)
-                self._file = None
             self.discard()
             raise
 

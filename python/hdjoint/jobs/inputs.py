@@ -7,7 +7,7 @@ import contextlib
 import os
 from pathlib import Path
 
-from hdjoint.io.outputs import OutputError, OutputLock, check_replaceable
+from hdjoint.io.outputs import OutputError, OutputLock, check_replaceable, printable
 
 
 class UserError(Exception):
@@ -48,6 +48,7 @@ def _same_file(a: Path, b: Path) -> bool:
 def check_output_file(path, inputs=()) -> None:
     """Refuse, before any work, an output file that is one of INPUTS (by any
     path), a directory, or in a missing or unwritable directory."""
+    _not_empty(path, "-o")
     out = Path(path)
     for given in inputs:
         if given is not None and _same_file(out, Path(given)):
@@ -56,6 +57,12 @@ def check_output_file(path, inputs=()) -> None:
         raise UserError(f"{path}: is a directory; the output must name a file")
     _check_writable_directory(path, out.absolute().parent)
     _replaceable(out)
+
+
+def _not_empty(path, option: str) -> None:
+    """An empty output path would mean the current folder: refused."""
+    if not os.fspath(path).strip():
+        raise UserError(f"{option} {printable(repr(os.fspath(path)))}: an empty output path; name a file or folder")
 
 
 def _replaceable(path: Path) -> None:
@@ -91,6 +98,7 @@ def check_output_directory(out, names, inputs=()) -> None:
     """Refuse, before any work, an output directory that is a file, or whose
     NAMES (the files to be written) are directories or inputs; a missing one
     needs a writable existing ancestor (it is created once all is computed)."""
+    _not_empty(out, "--out")
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise UserError(f"{out}: exists and is not a directory")

@@ -1,0 +1,129 @@
+"""Attacks through the output path (issue 56): a symbolic link where an
+output goes (to a file, to stdout, dangling), one put there after the check,
+an empty path. Each is refused with exit code 2 naming the path, and the
+link and whatever it points to are left as they were."""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import pytest
+
+from hdjoint.io.outputs import OutputError, open_temp, replace_into
+
+from cli_helpers import assert_one_line_error, rec_csv, run_cli, simulated  # noqa: F401 (fixtures)
+
+
+def _link(tmp_path, kind):
+    """A symbolic link out.csv and what it points to (None: nothing there)."""
+    target = {"to a file": tmp_path / "victim.txt", "dangling": tmp_path / "nowhere.txt",
+              "to a read-only file": tmp_path / "ro.txt"}[kind]
+    if kind != "dangling":
+        target.write_text("precious\n")
+    if kind == "to a read-only file":
+        target.chmod(0o444)
+    link = tmp_path / "out.csv"
+    link.symlink_to(target)
+    return link, target
+
+
+@pytest.mark.parametrize("kind", ["to a file", "dangling", "to a read-only file"])
+@pytest.mark.parametrize("command", ["estimate", "simulate"])
+def test_an_output_that_is_a_link_is_refused(rec_csv, tmp_path, capsys, kind, command):
+    link, target = _link(tmp_path, kind)
+    argv = ("estimate", rec_csv, "-o", link) if command == "estimate" else ("simulate", "--duration", "0.1",
+                                                                            "-o", link)
+    code, _, err = run_cli(capsys, *argv)
+    assert code == 2
+    assert_one_line_error(err, str(link), "symbolic link")
+    assert link.is_symlink() and os.readlink(link) == str(target)
+    assert (target.read_text() == "precious\n") if kind != "dangling" else not target.exists()
+    assert not [p for p in os.listdir(tmp_path) if p.endswith(".tmp")]
+
+
+def test_a_link_to_stdout_is_not_replaced(rec_csv, tmp_path):
+    """The audit's case: `-o so_link` with so_link -> /proc/self/fd/1, stdout a regular file."""
+    link = tmp_path / "so_link"
+    link.symlink_to("/proc/self/fd/1")
+    with open(tmp_path / "stdout.txt", "w") as stdout:
+        done = subprocess.run([sys.executable, "-m", "hdjoint.app.cli", "estimate", str(rec_csv), "-o", str(link)],
+                              stdout=stdout, stderr=subprocess.PIPE, text=True, cwd=tmp_path, timeout=120)
+    assert done.returncode == 2, done.stderr
+    assert "symbolic link" in done.stderr and str(link) in done.stderr
+    assert link.is_symlink()
+
+
+def test_a_link_in_the_diagnosis_folder_is_refused(rec_csv, tmp_path, capsys):
+    out = tmp_path / "d"
+    out.mkdir()
+    victim = tmp_path / "victim.json"
+    victim.write_text("{}\n")
+    (out / "params.json").symlink_to(victim)
+    code, _, err = run_cli(capsys, "diagnose", rec_csv, "--out", out)
+    assert code == 2
+    assert_one_line_error(err, str(out / "params.json"), "symbolic link")
+    assert victim.read_text() == "{}\n" and (out / "params.json").is_symlink()
+
+
+@pytest.mark.parametrize("placed", ["a link", "a FIFO", "a read-only file"])
+def test_what_appears_after_the_check_is_not_replaced(tmp_path, placed):
+    """Between the check and the move, something else is put where the output goes: the move refuses it."""
+    target = tmp_path / "out.csv"
+    f, tmp = open_temp(target)
+    with f:
+        f.write("new\n")
+    if placed == "a link":
+        (tmp_path / "victim").write_text("precious\n")
+        target.symlink_to(tmp_path / "victim")
+    elif placed == "a FIFO":
+        os.mkfifo(target)
+    else:
+        target.write_text("precious\n")
+        target.chmod(0o444)
+    with pytest.raises(OutputError, match="out.csv"):
+        replace_into(tmp, target)
+    if placed == "a link":
+        assert target.is_symlink() and (tmp_path / "victim").read_text() == "precious\n"
+    elif placed == "a read-only file":
+        assert target.read_text() == "precious\n"
+    os.unlink(tmp)
+
+
+@pytest.mark.parametrize("existing", [False, True])
+def test_a_regular_output_is_still_replaced_with_its_mode(tmp_path, existing):
+    target = tmp_path / "out.csv"
+    if existing:
+        target.write_text("old\n")
+        target.chmod(0o640)
+    f, tmp = open_temp(target)
+    with f:
+        f.write("new\n")
+    replace_into(tmp, target)
+    assert target.read_text() == "new\n" and not os.path.exists(tmp)
+    if existing:
+        assert target.stat().st_mode & 0o777 == 0o640
+
+
+def test_the_temporary_file_is_never_opened_through_a_link(tmp_path, monkeypatch):
+    """A link planted under the temporary file's name is not followed (O_EXCL, O_NOFOLLOW)."""
+    victim = tmp_path / "victim"
+    victim.write_text("precious\n")
+    planted = tmp_path / ".out.csv.planted.tmp"
+    planted.symlink_to(victim)
+    monkeypatch.setattr("hdjoint.io.outputs.temp_path", lambda path: str(planted))
+    with pytest.raises(FileExistsError):
+        open_temp(tmp_path / "out.csv")
+    assert victim.read_text() == "precious\n"
+
+
+@pytest.mark.parametrize("argv", [("diagnose", "{rec}", "--out", ""), ("estimate", "{rec}", "-o", ""),
+                                  ("simulate", "-o", "")],
+                         ids=lambda a: " ".join(a[:2]))
+def test_an_empty_output_path_is_refused(rec_csv, tmp_path, capsys, monkeypatch, argv):
+    monkeypatch.chdir(tmp_path)
+    before = sorted(os.listdir(tmp_path))
+    code, _, err = run_cli(capsys, *(a.format(rec=rec_csv) for a in argv))
+    assert code == 2
+    assert_one_line_error(err, "empty")
+    assert sorted(os.listdir(tmp_path)) == before
