@@ -73,3 +73,31 @@ def test_no_orphan_survives_a_killed_diagnosis(simulated, tmp_path, after):
         os.kill(p, signal.SIGKILL)
     assert not survivors, f"orphans of the killed run: {survivors}"
     OutputLock(out).acquire().release()  # the next run is not refused
+
+
+# ---------------------------------------------------------------- memory
+
+RAISE_AFTER_UNPACKING = """
+import sys
+from hdjoint.estimation import engines
+run = engines.FmuEngine.run
+def failing(self, *args):
+    run(self, *args)  # the FMU is unpacked by now
+    raise MemoryError
+engines.FmuEngine.run = failing
+from hdjoint.app.cli import main
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+def test_out_of_memory_is_one_line_and_leaves_nothing(simulated, tmp_path):
+    temp = tmp_path / "tmpdir"
+    temp.mkdir()
+    out = tmp_path / "est.csv"
+    done = subprocess.run([sys.executable, "-c", RAISE_AFTER_UNPACKING, "estimate", str(simulated), "-o", str(out)],
+                          capture_output=True, text=True, cwd=tmp_path, timeout=120,
+                          env={**os.environ, "TMPDIR": str(temp)})
+    assert done.returncode == 1, done.stderr
+    assert done.stderr.count("\n") == 1 and "out of memory" in done.stderr, done.stderr
+    assert os.listdir(temp) == []  # the unpacked FMU is gone
+    assert sorted(os.listdir(tmp_path)) == ["tmpdir"]

@@ -11,7 +11,7 @@ import os
 import signal
 import sys
 
-from hdjoint.io.outputs import OutputError
+from hdjoint.app.outcome import TOLD, told
 from hdjoint.jobs.inputs import UserError, check_output_file, locked_output, read_params as _params
 from hdjoint.fleet.cli import whole_number
 from hdjoint.io.timebase import TIME_UNITS
@@ -215,12 +215,8 @@ def main(argv=None) -> int:
         pass
     try:
         return args.run(args)
-    except (UserError, OutputError) as e:
-        print(f"hdjoint {args.command}: {e}", file=sys.stderr)
-        return 2
-    except (OSError, RuntimeError, ValueError) as e:
-        print(f"hdjoint {args.command}: {e}", file=sys.stderr)
-        return 1
+    except TOLD as e:  # one line, one exit-code layer for every command (app/outcome.py)
+        return told(args.command, e)
     except KeyboardInterrupt:  # one line, no traceback; the jobs' cleanups have run
         print(f"hdjoint {args.command}: interrupted (SIGINT); no output was left half-written", file=sys.stderr)
         return 128 + signal.SIGINT
