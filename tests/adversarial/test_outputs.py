@@ -118,7 +118,8 @@ def test_the_temporary_file_is_never_opened_through_a_link(tmp_path, monkeypatch
 
 
 @pytest.mark.parametrize("argv", [("diagnose", "{rec}", "--out", ""), ("estimate", "{rec}", "-o", ""),
-                                  ("simulate", "-o", "")],
+                                  ("simulate", "-o", ""), ("fmus", "--out", ""), ("demo", "--out", ""),
+                                  ("fleet", "estimate", "{rec}", "--out", ""), ("fleet", "generate", "")],
                          ids=lambda a: " ".join(a[:2]))
 def test_an_empty_output_path_is_refused(rec_csv, tmp_path, capsys, monkeypatch, argv):
     monkeypatch.chdir(tmp_path)
@@ -127,3 +128,44 @@ def test_an_empty_output_path_is_refused(rec_csv, tmp_path, capsys, monkeypatch,
     assert code == 2
     assert_one_line_error(err, "empty")
     assert sorted(os.listdir(tmp_path)) == before
+
+
+# ---------------------------------------------------------------- folders: fmus, demo, fleet generate
+
+FOLDER_COMMANDS = [("fmus", "--out", "{out}"), ("demo", "--out", "{out}"),
+                   ("fleet", "generate", "{out}", "--joints", "1", "--days", "1", "--duration", "0.5")]
+
+
+@pytest.mark.parametrize("argv", FOLDER_COMMANDS, ids=lambda a: " ".join(a[:2]))
+def test_a_folder_that_cannot_be_made_is_refused_before_any_work(tmp_path, capsys, argv):
+    blocker = tmp_path / "a-file"
+    blocker.write_text("x\n")
+    out = blocker / "out"
+    code, _, err = run_cli(capsys, *(a.format(out=out) for a in argv))
+    assert code == 2
+    assert_one_line_error(err, str(out), "not a directory")
+    assert "Errno" not in err
+    assert sorted(os.listdir(tmp_path)) == ["a-file"]
+
+
+def _disk_full(*args, **kwargs):
+    raise OSError(28, "No space left on device")
+
+
+@pytest.mark.parametrize("argv", FOLDER_COMMANDS, ids=lambda a: " ".join(a[:2]))
+def test_a_full_disk_leaves_no_folder(tmp_path, capsys, monkeypatch, argv):
+    """The disk fills while the folder is written: exit 2 naming the file, and no half-written (or empty) folder."""
+    import shutil
+    from hdjoint.io import recording
+    if argv[0] == "fleet":  # the recordings
+        monkeypatch.setattr(recording.CsvWriter, "write_cells", lambda self, cells: self._guard(_disk_full))
+    else:  # the FMUs (fmus, demo's first step)
+        monkeypatch.setattr(shutil, "copyfileobj", _disk_full)
+    out = tmp_path / "new" / "out"
+    code, _, err = run_cli(capsys, *(a.format(out=out) for a in argv))
+    assert code == 2
+    told = [line for line in err.splitlines() if line.startswith("hdjoint ")]  # after the demo's progress lines
+    assert len(told) == 1
+    assert_one_line_error(told[0], str(out), "the disk is full")
+    assert "Errno" not in err
+    assert os.listdir(tmp_path) == []

@@ -12,7 +12,7 @@ import signal
 import sys
 
 from hdjoint.app.outcome import TOLD, told
-from hdjoint.jobs.inputs import UserError, check_output_file, locked_output, read_params as _params
+from hdjoint.jobs.inputs import UserError, check_output_file, locked_output, read_params as _params, written_folder
 from hdjoint.fleet.cli import whole_number
 from hdjoint.io.timebase import TIME_UNITS
 
@@ -26,7 +26,9 @@ MIN_DURATION = 0.01
 def cmd_fmus(args) -> int:
     from hdjoint.fmu.shipped import FMI_VERSIONS, export_fmus
     versions = FMI_VERSIONS if args.fmi == "both" else (int(args.fmi),)
-    for path in export_fmus(args.out, versions):
+    with written_folder(args.out):
+        written = export_fmus(args.out, versions)
+    for path in written:
         print(path)
     return 0
 
@@ -110,7 +112,8 @@ def cmd_demo(args) -> int:
     from pathlib import Path
 
     from hdjoint.app.demo import run_demo
-    run_demo(Path(args.out))
+    with written_folder(args.out):
+        run_demo(Path(args.out))
     return 0
 
 

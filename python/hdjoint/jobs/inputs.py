@@ -5,9 +5,10 @@ from __future__ import annotations
 
 import contextlib
 import os
+import shutil
 from pathlib import Path
 
-from hdjoint.io.outputs import OutputError, OutputLock, check_replaceable, printable
+from hdjoint.io.outputs import OutputError, OutputLock, check_replaceable, created_directory, printable
 
 
 class UserError(Exception):
@@ -89,9 +90,9 @@ def locked_output(path):
 def _check_writable_directory(path, directory: Path) -> None:
     if not directory.is_dir():
         what = "is not a directory" if directory.exists() else "does not exist"
-        raise UserError(f"{path}: the directory {directory} {what}")
+        raise UserError(f"{printable(path)}: the directory {printable(directory)} {what}")
     if not os.access(directory, os.W_OK | os.X_OK):
-        raise UserError(f"{path}: the directory {directory} is not writable")
+        raise UserError(f"{printable(path)}: the directory {printable(directory)} is not writable")
 
 
 def check_output_directory(out, names, inputs=()) -> None:
@@ -114,3 +115,28 @@ def check_output_directory(out, names, inputs=()) -> None:
     while not ancestor.exists():
         ancestor = ancestor.parent
     _check_writable_directory(out, ancestor)
+
+
+@contextlib.contextmanager
+def written_folder(out, option: str = "--out"):
+    """A folder a command writes (fmus, demo, fleet generate), checked before
+    any work (not empty, not a file, in a writable place: else exit 2 naming
+    it) and locked for the run; should the run fail, a folder it created goes
+    with all it wrote (each file in a folder that was there is written whole
+    or not at all)."""
+    _not_empty(out, option)
+    path = Path(out)
+    if path.exists() and not path.is_dir():
+        raise UserError(f"{printable(out)}: exists and is not a directory")
+    ancestor = path.absolute()
+    while not ancestor.exists():
+        ancestor = ancestor.parent
+    _check_writable_directory(out, ancestor)
+    created = created_directory(path)
+    with locked_output(path):
+        try:
+            yield path
+        except BaseException:
+            if created:
+                shutil.rmtree(created[0], ignore_errors=True)
+            raise
