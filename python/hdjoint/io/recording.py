@@ -6,13 +6,15 @@ sample, time strictly increasing.  Required columns: ``time``, ``i_m``,
 (in ``Recording.extra``) and otherwise ignored.
 
 A malformed file raises one ``RecordingError`` naming the file and, where it
-applies, the 1-based line (the header is line 1) and the column.
+applies, the 1-based line (the header is line 1) and the column; never the
+file's contents (a recording may be a link to a file that is not one, and
+the message reaches pages and tables). A line longer than MAX_LINE
+characters is refused as it is read: memory stays bounded whatever the file.
 """
 
 from __future__ import annotations
 
 import csv
-import itertools
 import math
 import os
 import warnings
@@ -21,13 +23,16 @@ from typing import Iterable, Iterator, Mapping, Sequence
 
 import numpy as np
 
-from hdjoint.io.outputs import check_replaceable, open_temp, replace_into, sweep_debris, write_error
+from hdjoint.io.outputs import check_replaceable, open_temp, printable, replace_into, sweep_debris, write_error
 
 REQUIRED_COLUMNS = ("time", "i_m", "theta_m", "theta_l")
 OPTIONAL_COLUMNS = ("tau_sensor",)
 # Columns the tools compute with: these must be numbers and finite.
 KNOWN_COLUMNS = REQUIRED_COLUMNS + OPTIONAL_COLUMNS
 MIN_ROWS = 2
+# The longest line read, in characters: a row of a recording is tens of characters, a header hundreds.
+MAX_LINE = 1 << 16
+BLOCK_CHARS = 1 << 25  # the most text one block holds (32 M characters), however long its lines
 
 __all__ = [
     "REQUIRED_COLUMNS",
@@ -47,7 +52,7 @@ class RecordingError(ValueError):
 
     The message always starts with the file name, then the line and column
     when the problem has one, e.g.
-    ``data.csv: line 17, column theta_l: 'abc' is not a number``.
+    ``data.csv: line 17, column theta_l: not a number``.
     """
 
     def __init__(self, path, reason: str, line: int | None = None,
@@ -61,7 +66,7 @@ class RecordingError(ValueError):
             where.append(f"line {line}")
         if column is not None:
             where.append(f"column {column}")
-        prefix = f"{self.path}: " + (", ".join(where) + ": " if where else "")
+        prefix = f"{printable(self.path)}: " + (", ".join(where) + ": " if where else "")
         super().__init__(prefix + reason)
 
     def __reduce__(self):
@@ -155,6 +160,7 @@ class Recording:
 
 
 def _check_header(path: str, header: list[str]) -> list[str]:
+    """The column names; a message names only the contract's own (the others are the file's contents)."""
     names = [name.strip() for name in header]
     seen: dict[str, int] = {}
     for i, name in enumerate(names, start=1):
@@ -163,13 +169,16 @@ def _check_header(path: str, header: list[str]) -> list[str]:
         if name in seen:
             raise RecordingError(
                 path, f"duplicate column name (columns {seen[name]} and {i})",
-                line=1, column=name)
+                line=1, column=name if name in KNOWN_COLUMNS else None)
         seen[name] = i
     missing = [c for c in REQUIRED_COLUMNS if c not in seen]
     if missing:
+        known = [n for n in names if n in KNOWN_COLUMNS]
+        others = len(names) - len(known)
+        found = ", ".join(known + ([f"{others} other column{'s' if others > 1 else ''}"] if others else []))
         raise RecordingError(
             path, f"missing required column{'s' if len(missing) > 1 else ''} "
-                  f"{', '.join(missing)} (found: {', '.join(names)})", line=1)
+                  f"{', '.join(missing)} (found: {found}; is this a recording?)", line=1)
     return names
 
 
@@ -196,9 +205,9 @@ def _first_bad_cell(cells: Sequence[str]) -> tuple[int, str] | None:
         try:
             value = _number(cell)
         except ValueError:
-            return i, f"{cell!r} is not a number"
+            return i, "not a number" if cell.strip() else "empty, not a number"
         if not math.isfinite(value):
-            return i, f"{cell.strip()!r} is not a finite number"
+            return i, "not a finite number (nan or inf)"
     return None
 
 
@@ -240,8 +249,7 @@ def _check_time(path, time, lines):
     if bad.size:
         k = int(bad[0]) + 1
         raise RecordingError(
-            path, f"time {float(time[k])!r} is not after {float(time[k - 1])!r} on line "
-                  f"{lines[k - 1]} (time must be strictly increasing)",
+            path, f"not after the time on line {lines[k - 1]} (time must be strictly increasing)",
             line=lines[k], column="time")
 
 
@@ -257,9 +265,19 @@ def _open(path: str):
         raise RecordingError(path, f"cannot read file: {exc.strerror or exc}") from None
 
 
-def _read_lines(path: str, f, count: int) -> list[str]:
+def _read_lines(path: str, f, count: int, first_line: int) -> list[str]:
+    """Up to COUNT lines from F, FIRST_LINE the first's number; a line over MAX_LINE characters is refused."""
+    lines, size = [], 0
     try:
-        return list(itertools.islice(f, count))
+        for line in iter(lambda: f.readline(MAX_LINE + 2), ""):
+            if len(line) > MAX_LINE and len(line.rstrip("\r\n")) > MAX_LINE:
+                raise RecordingError(path, f"longer than {MAX_LINE} characters; a recording's lines are far shorter "
+                                           "(is this a recording?)", line=first_line + len(lines))
+            lines.append(line)
+            size += len(line)
+            if len(lines) == count or size >= BLOCK_CHARS:  # a block of long lines ends early
+                break
+        return lines
     except UnicodeDecodeError as exc:
         raise RecordingError(path, f"not UTF-8 text ({exc.reason} at byte {exc.start} of a block)") from None
     except OSError as exc:
@@ -267,9 +285,9 @@ def _read_lines(path: str, f, count: int) -> list[str]:
 
 
 def _read_header(path: str, f) -> list[str]:
-    first = _read_lines(path, f, 1)
+    first = _read_lines(path, f, 1, 1)
     if not first or not first[0].strip():
-        rest = _read_lines(path, f, 1 << 16)
+        rest = _read_lines(path, f, 1 << 16, 2)
         if any(line.strip() for line in rest):
             # Keep the "header is line 1" promise honest when blank lines lead.
             raise RecordingError(path, "header row must be the first line",
@@ -350,7 +368,7 @@ def iter_recording(path, rows: int = CHUNK_ROWS) -> Iterator[Chunk]:
     with _open(path) as f:
         names = _read_header(path, f)
         next_line, last, total = 2, None, 0
-        while lines := _read_lines(path, f, rows):
+        while lines := _read_lines(path, f, rows, next_line):
             columns = _chunk_fast(names, lines)
             numbers = np.arange(next_line, next_line + len(lines))
             if columns is None:
