@@ -32,6 +32,9 @@ KNOWN_COLUMNS = REQUIRED_COLUMNS + OPTIONAL_COLUMNS
 MIN_ROWS = 2
 # The longest line read, in characters: a row of a recording is tens of characters, a header hundreds.
 MAX_LINE = 1 << 16
+# The largest magnitude a computed-with column may hold: no measurement comes near, and the squares and
+# rates of anything below stay finite (a 1e308 would overflow the arithmetic far from its line).
+MAX_MAGNITUDE = 1e100
 BLOCK_CHARS = 1 << 25  # the most text one block holds (32 M characters), however long its lines
 
 __all__ = [
@@ -208,6 +211,8 @@ def _first_bad_cell(cells: Sequence[str]) -> tuple[int, str] | None:
             return i, "not a number" if cell.strip() else "empty, not a number"
         if not math.isfinite(value):
             return i, "not a finite number (nan or inf)"
+        if abs(value) > MAX_MAGNITUDE:
+            return i, f"too large a number (over {MAX_MAGNITUDE:g} in size) for a measurement"
     return None
 
 
@@ -220,7 +225,7 @@ def _parse_known_columns(path, names, columns, lines) -> dict[str, np.ndarray]:
         cells = columns[names.index(name)]
         try:
             arr = np.fromiter(map(_number, cells), dtype=float, count=len(cells))
-            ok = bool(np.isfinite(arr).all())
+            ok = bool((np.abs(arr) <= MAX_MAGNITUDE).all())  # NaN fails too
         except ValueError:
             ok = False
         if ok:
@@ -319,7 +324,7 @@ def _chunk_fast(names, lines: list[str]) -> dict[str, np.ndarray] | None:
     if data.shape != (len(lines), len(names)):  # e.g. a blank line: the line numbers would shift
         return None
     columns = dict(zip(names, np.ascontiguousarray(data.T)))
-    if not all(np.isfinite(columns[name]).all() for name in KNOWN_COLUMNS if name in columns):
+    if not all((np.abs(columns[name]) <= MAX_MAGNITUDE).all() for name in KNOWN_COLUMNS if name in columns):
         return None
     if not (np.diff(columns["time"]) > 0).all():
         return None
