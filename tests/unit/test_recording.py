@@ -74,13 +74,15 @@ def test_round_trip_is_bit_exact(tmp_path, with_sensor):
 
 def test_round_trip_extreme_values(tmp_path):
     # Values whose '%g'-style formatting would lose bits.
-    vals = np.array([0.1, 1 / 3, 1e-300, -5e-324, 1.7976931348623157e308, -0.0])
+    # The largest double goes in an extra column: a computed-with one refuses it (recording.MAX_MAGNITUDE).
+    vals = np.array([0.1, 1 / 3, 1e-300, -5e-324, recording.MAX_MAGNITUDE, -0.0])
     path = tmp_path / "x.csv"
     write_csv(path, {"time": np.arange(6.0), "i_m": vals, "theta_m": vals,
-                     "theta_l": vals})
+                     "theta_l": vals, "extra": np.where(vals == recording.MAX_MAGNITUDE, 1.7976931348623157e308, vals)})
     back = read_recording(path)
     np.testing.assert_array_equal(back.i_m, vals)
     assert np.signbit(back.i_m[-1])
+    assert back.extra["extra"][4] == 1.7976931348623157e308
 
 
 def test_extra_columns_kept_numeric_and_text(tmp_path):
