@@ -32,9 +32,9 @@ KNOWN_COLUMNS = REQUIRED_COLUMNS + OPTIONAL_COLUMNS
 MIN_ROWS = 2
 # The longest line read, in characters: a row of a recording is tens of characters, a header hundreds.
 MAX_LINE = 1 << 16
-# The largest magnitude a computed-with column may hold: no measurement comes near, and the squares and
-# rates of anything below stay finite (a 1e308 would overflow the arithmetic far from its line).
-MAX_MAGNITUDE = 1e100
+# The largest magnitude a computed-with column may hold: the FMUs' input range. Beyond it (a 1e308), the
+# arithmetic would overflow far from its line; within it, a wild sample is screened (io/screening.py).
+MAX_MAGNITUDE = 1e300
 BLOCK_CHARS = 1 << 25  # the most text one block holds (32 M characters), however long its lines
 
 __all__ = [
