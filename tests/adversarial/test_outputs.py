@@ -169,3 +169,30 @@ def test_a_full_disk_leaves_no_folder(tmp_path, capsys, monkeypatch, argv):
     assert_one_line_error(told[0], str(out), "the disk is full")
     assert "Errno" not in err
     assert os.listdir(tmp_path) == []
+
+
+# ---------------------------------------------------------------- a full temporary folder
+
+def _can_mount_privately() -> bool:
+    import shutil
+    if not shutil.which("unshare"):
+        return False
+    return subprocess.run(["unshare", "-rm", "true"], capture_output=True).returncode == 0
+
+
+@pytest.mark.skipif(not _can_mount_privately(), reason="needs unshare -rm (a private mount namespace)")
+@pytest.mark.parametrize("engine", ["batch", "fmu"])
+def test_a_full_temporary_folder_is_told_plainly(simulated, tmp_path, engine):
+    """--smooth (or the FMU's unpacking) with TMPDIR on a 256 kB file system of its own (in a private mount
+    namespace: nothing outside sees it): exit 2, the folder named as full, nothing left."""
+    small = tmp_path / "small"
+    small.mkdir()
+    out = tmp_path / "s.csv"
+    script = (f"mount -t tmpfs -o size=256k tmpfs {small} && TMPDIR={small} {sys.executable} -m hdjoint.app.cli "
+              f"estimate {simulated} --smooth --engine {engine} -o {out}; code=$?; ls -A {small}; exit $code")
+    done = subprocess.run(["unshare", "-rm", "sh", "-c", script], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2, done.stderr
+    assert_one_line_error(done.stderr, str(small), "full")
+    assert "requested and" not in done.stderr
+    assert done.stdout == ""  # the small folder is left empty
+    assert not out.exists() and sorted(os.listdir(tmp_path)) == ["small"]

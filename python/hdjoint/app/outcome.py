@@ -34,7 +34,7 @@ def message(exc: BaseException) -> str:
                 "and the temporary files are removed")
     if isinstance(exc, OSError) and exc.errno is not None:
         reason = exc.strerror or str(exc)
-        if exc.errno in FULL:
+        if exc.errno in FULL and "full" not in reason:
             reason += " (the disk is full)"
         if exc.filename is not None:
             target = f" -> {printable(exc.filename2)}" if exc.filename2 is not None else ""
