@@ -12,6 +12,7 @@ import signal
 import sys
 
 from hdjoint.app.outcome import TOLD, told
+from hdjoint.io.outputs import printable
 from hdjoint.jobs.inputs import UserError, check_output_file, locked_output, read_params as _params, written_folder
 from hdjoint.fleet.cli import whole_number
 from hdjoint.io.timebase import TIME_UNITS
@@ -54,7 +55,7 @@ def cmd_simulate(args) -> int:
         rec = experiments.run(args.experiment, joint=joint, nominal=nominal, duration=args.duration,
                               sensors=experiments.Sensors(seed=args.seed))
         write_recording(args.output, rec)
-    print(f"{args.output}: {len(rec)} samples, {rec.duration:.3f} s ({args.experiment})")
+    print(f"{printable(args.output)}: {len(rec)} samples, {rec.duration:.3f} s ({args.experiment})")
     return 0
 
 
@@ -77,7 +78,7 @@ def cmd_estimate(args) -> int:
         for name, fig in figures.items():
             print(f"{name:<16} {fig.rms:>10.4f} {fig.max:>10.4f}")
     else:
-        print(f"wrote {args.output} (the recording has no tau_sensor: no error figures)")
+        print(f"wrote {printable(args.output)} (the recording has no tau_sensor: no error figures)")
     return 0
 
 
@@ -87,7 +88,7 @@ def cmd_diagnose(args) -> int:
                                 args.current_sign)
     for line in diagnosis_lines(doc):
         print(line)
-    print(f"wrote {args.out}/findings.json, params.json, params.ssv, report.html ({doc['seconds']} s)")
+    print(f"wrote {printable(args.out)}/findings.json, params.json, params.ssv, report.html ({doc['seconds']} s)")
     return 0
 
 

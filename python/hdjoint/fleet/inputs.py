@@ -183,6 +183,6 @@ def plan(patterns: list[str], params_map: str | None, joint_pattern: str | None,
         used = {pmap.match(rec)[0] for rec in recordings}
         for pattern, _, _ in pmap.entries:
             if pattern not in used:
-                print(f"warning: {params_map}: pattern '{pattern}' is used for none of the recordings",
+                print(f"warning: {printable(params_map)}: pattern '{pattern}' is used for none of the recordings",
                       file=sys.stderr)
     return jobs
