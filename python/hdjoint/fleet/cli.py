@@ -37,12 +37,13 @@ def cmd_fleet(args) -> int:
                         joint_pattern=args.joint_pattern, scheduler=args.scheduler, workers=args.workers,
                         options=options, show_progress=not args.quiet,
                         allowed_failures=ALLOWED_FAILURES if args.allowed_failures is None else args.allowed_failures)
+    from hdjoint.io.outputs import printable
     print(f"{len(summary.rows)} recordings: {summary.computed} processed now, {summary.cached} done earlier, "
-          f"{summary.failed} failed; wrote {summary.parquet} and {summary.html}")
+          f"{summary.failed} failed; wrote {printable(summary.parquet)} and {printable(summary.html)}")
     if summary.rows and summary.failed == len(summary.rows):
         first = next(r for r in summary.rows if r.get("status") != "ok")
-        print(f"hdjoint fleet: every recording failed ({summary.failed}); the first, {first['recording']}: "
-              f"{first.get('error')}", file=sys.stderr)
+        print(printable(f"hdjoint fleet: every recording failed ({summary.failed}); the first, {first['recording']}: "
+                        f"{first.get('error')}"), file=sys.stderr)
         return 1
     from hdjoint.fleet.trend import rank_joints
     for d in rank_joints(summary.rows)[:5]:
