@@ -196,3 +196,26 @@ def test_a_full_temporary_folder_is_told_plainly(simulated, tmp_path, engine):
     assert "requested and" not in done.stderr
     assert done.stdout == ""  # the small folder is left empty
     assert not out.exists() and sorted(os.listdir(tmp_path)) == ["small"]
+
+
+@pytest.mark.parametrize("writer", ["text", "figure", "parameters"])
+def test_every_whole_file_writer_refuses_a_link(tmp_path, writer):
+    """The files fleet generate, demo and diagnose write whole (pages, maps, figures, parameter sets)."""
+    from hdjoint.io import figures, parameters
+    from hdjoint.io.outputs import write_whole
+    victim = tmp_path / "victim"
+    victim.write_text("precious\n")
+    link = tmp_path / {"text": "truth.json", "figure": "torque.png", "parameters": "params.json"}[writer]
+    link.symlink_to(victim)
+    with pytest.raises(OutputError, match="symbolic link"):
+        if writer == "text":
+            write_whole(link, "{}\n")
+        elif writer == "figure":
+            import matplotlib
+            matplotlib.use("Agg")
+            import matplotlib.pyplot as plt
+            figures.save(plt.figure(), link)
+        else:
+            parameters.save(link, parameters.defaults())
+    assert victim.read_text() == "precious\n" and link.is_symlink()
+    assert sorted(os.listdir(tmp_path)) == sorted(["victim", link.name])

@@ -19,6 +19,7 @@ from hdjoint.io import figures as plots
 from hdjoint.io import parameters
 from hdjoint.io.recording import write_csv, write_recording
 from hdjoint.jobs.paper_calibration import sensorless_set
+from hdjoint.io.outputs import write_whole
 
 
 def _say(message: str) -> None:
@@ -44,7 +45,7 @@ def run_demo(out: Path) -> None:
     _say("[4/5] the paper's table: compliance model vs UKF (default and fairly tuned), tau_hat, tau_smooth, "
          "and tau_hat after a sensorless calibration on another run")
     table = reproduce(rec, calibrated=sensorless_set(rec, out))  # calibrated on another run, no torque sensor
-    (out / "paper_table.md").write_text(table.markdown() + "\n")
+    write_whole(out / "paper_table.md", table.markdown() + "\n")
     plots.save(plots.torque_comparison(rec.time, table.estimates, "Paper experiment: estimates vs true torque"),
                out / "paper_torque.png")
     print(table.markdown())

@@ -250,6 +250,24 @@ def replace_into(tmp, path) -> None:
         os.replace(tname, name, src_dir_fd=src.fd, dst_dir_fd=dst.fd)
 
 
+def write_whole(path, data: str | bytes) -> None:
+    """DATA (text as UTF-8) into PATH in one step through open_temp and
+    replace_into: never through or over a link, a device or a read-only
+    file; on any failure (OutputError naming PATH) nothing is left."""
+    check_replaceable(path)
+    tmp = None
+    try:
+        f, tmp = open_temp(path, binary=isinstance(data, bytes))
+        with f:
+            f.write(data)
+        replace_into(tmp, path)  # an existing file keeps its mode; a new one as the umask says
+    except OSError as e:
+        raise write_error(path, e) from None
+    finally:
+        if tmp and os.path.lexists(tmp):
+            os.unlink(tmp)
+
+
 def write_error(path, exc: OSError) -> OutputError:
     """An OSError while writing PATH as one line naming PATH (ENOSPC: the disk is full)."""
     reason = exc.strerror or str(exc)

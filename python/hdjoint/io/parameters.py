@@ -323,22 +323,8 @@ def load_tolerances(path: str | os.PathLike | None) -> dict[str, float]:
 
 
 def _atomic_write(path: str | os.PathLike, text: str) -> None:
-    from hdjoint.io.outputs import check_replaceable, open_temp, replace_into, write_error
-    check_replaceable(path)  # never over a link, a device node, a FIFO or a read-only file
-    tmp = None
-    try:
-        f, tmp = open_temp(path)
-        with f:
-            f.write(text)
-        replace_into(tmp, path)  # an existing file keeps its mode; a new one as the umask says
-    except OSError as e:
-        if tmp:
-            Path(tmp).unlink(missing_ok=True)
-        raise write_error(path, e) from None
-    except BaseException:
-        if tmp:
-            Path(tmp).unlink(missing_ok=True)
-        raise
+    from hdjoint.io.outputs import write_whole
+    write_whole(path, text)  # never over a link, a device node, a FIFO or a read-only file
 
 
 def save(path: str | os.PathLike, params: dict[str, float]) -> None:
