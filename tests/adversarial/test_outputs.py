@@ -219,3 +219,19 @@ def test_every_whole_file_writer_refuses_a_link(tmp_path, writer):
             parameters.save(link, parameters.defaults())
     assert victim.read_text() == "precious\n" and link.is_symlink()
     assert sorted(os.listdir(tmp_path)) == sorted(["victim", link.name])
+
+
+@pytest.mark.parametrize("planted", ["a link", "a FIFO"])
+def test_a_lock_file_that_is_not_one_is_refused(rec_csv, tmp_path, capsys, planted):
+    """The lock's name is known (.NAME.lock): a link planted there is neither followed nor truncated."""
+    victim = tmp_path / "victim"
+    victim.write_text("precious\n")
+    lock = tmp_path / ".e.csv.lock"
+    if planted == "a link":
+        lock.symlink_to(victim)
+    else:
+        os.mkfifo(lock)
+    code, _, err = run_cli(capsys, "estimate", rec_csv, "-o", tmp_path / "e.csv")
+    assert code == 2
+    assert_one_line_error(err, str(tmp_path / "e.csv"), "cannot lock")
+    assert victim.read_text() == "precious\n" and not (tmp_path / "e.csv").exists()

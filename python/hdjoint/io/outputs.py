@@ -294,10 +294,15 @@ class OutputLock:
 
     def acquire(self) -> "OutputLock":
         while True:
-            try:
-                fd = os.open(self.lock_path, os.O_RDWR | os.O_CREAT, 0o644)
+            try:  # never through a link planted under the lock's name (it is truncated below)
+                fd = os.open(self.lock_path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)
             except OSError as e:
-                raise OutputError(f"{printable(self.path)}: cannot lock the output ({e.strerror})") from None
+                raise OutputError(f"{printable(self.path)}: cannot lock the output ({printable(self.lock_path)}: "
+                                  f"{'a symbolic link' if e.errno == errno.ELOOP else e.strerror})") from None
+            if not stat.S_ISREG(os.fstat(fd).st_mode):
+                os.close(fd)
+                raise OutputError(f"{printable(self.path)}: cannot lock the output ({printable(self.lock_path)} "
+                                  "is not a regular file)")
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except BlockingIOError:
