@@ -30,7 +30,7 @@ def cmd_fmus(args) -> int:
     with written_folder(args.out):
         written = export_fmus(args.out, versions)
     for path in written:
-        print(path)
+        print(printable(path))
     return 0
 
 

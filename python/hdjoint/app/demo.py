@@ -19,7 +19,7 @@ from hdjoint.io import figures as plots
 from hdjoint.io import parameters
 from hdjoint.io.recording import write_csv, write_recording
 from hdjoint.jobs.paper_calibration import sensorless_set
-from hdjoint.io.outputs import write_whole
+from hdjoint.io.outputs import printable, write_whole
 
 
 def _say(message: str) -> None:
@@ -29,7 +29,7 @@ def _say(message: str) -> None:
 def run_demo(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
-    _say(f"[1/5] FMUs -> {out / 'fmus'}")
+    _say(f"[1/5] FMUs -> {printable(out / 'fmus')}")
     export_fmus(out / "fmus")
 
     _say("[2/5] simulating the paper experiment (HarmonicDriveJoint.fmu under position control, 58 s)")
@@ -53,7 +53,7 @@ def run_demo(out: Path) -> None:
     print(f"tuned UKF settings: {parameters.values_in_text(table.tuned_settings)}")
 
     _mission(out)
-    print(f"outputs in {out} ({time.perf_counter() - started:.1f} s); open {out / 'index.html'}")
+    print(f"outputs in {printable(out)} ({time.perf_counter() - started:.1f} s); open {printable(out / 'index.html')}")
 
 
 def _mission(out: Path) -> None:

@@ -72,7 +72,8 @@ def cmd_generate(args) -> int:
     with written_folder(args.out, "OUT"):
         path = generate(args.out, joints=args.joints, days=args.days, duration=args.duration,
                         progress=lambda m: print(f"[generate] {m}", file=sys.stderr, flush=True))
-    print(f"wrote {args.joints} joints x {args.days} days under {args.out}; params map {path}")
+    from hdjoint.io.outputs import printable
+    print(f"wrote {args.joints} joints x {args.days} days under {printable(args.out)}; params map {printable(path)}")
     print(f"try: hdjoint fleet diagnose '{args.out}/logs/**/*.csv' --params-map {path} "
           f"--joint-pattern '{JOINT_PATTERN}' --out FLEET")
     return 0
