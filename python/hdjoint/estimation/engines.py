@@ -44,10 +44,12 @@ class RejectedSamples:
 
     def warn(self) -> None:
         if self.count["rejected"]:
-            print(f"warning: {printable(self.path)}: the joint-state filter rejected {self.count['rejected']} outlier sample(s) "
+            print(f"warning: {printable(self.path)}: the joint-state filter rejected {self.count['rejected']} "
+                  "outlier sample(s) "
                   f"and predicted over them (at {self._where('rejected')}); tau_hat_std grows there", file=sys.stderr)
         if self.count["held"]:
-            print(f"warning: {printable(self.path)}: {self.count['held']} row(s) step over more than one sample (a gap, at "
+            print(f"warning: {printable(self.path)}: {self.count['held']} row(s) step over more than one sample "
+                  "(a gap, at "
                   f"{self._where('held')}): the filters predicted over the samples without a reading; "
                   "tau_ukf_std and tau_hat_std grow there", file=sys.stderr)
 

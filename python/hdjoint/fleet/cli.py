@@ -19,7 +19,8 @@ def _common(p) -> None:
     where = p.add_mutually_exclusive_group()
     where.add_argument("--scheduler", metavar="ADDR", help="a running Dask scheduler (tcp://host:8786)")
     where.add_argument("--workers", type=int, metavar="N",
-                       help=f"worker processes of the local cluster, at most {WORKERS_PER_CORE} a core (default: one per core)")
+                       help=f"worker processes of the local cluster, at most {WORKERS_PER_CORE} a core "
+                            "(default: one per core)")
     p.add_argument("--allowed-failures", type=int, default=None, metavar="K",
                    help="worker deaths one recording may cause before it is marked failed (local cluster; "
                         "default 2)")

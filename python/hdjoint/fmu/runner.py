@@ -80,7 +80,8 @@ class FmuInstance:
         except BaseException as e:  # a full temporary folder, memory
             shutil.rmtree(unzipdir, ignore_errors=True)
             if isinstance(e, OSError):
-                raise OSError(e.errno, f"cannot unpack {self.path.name} into {unzipdir} (TMPDIR): {e.strerror}") from None
+                raise OSError(e.errno, f"cannot unpack {self.path.name} into {unzipdir} (TMPDIR): "
+                                       f"{e.strerror}") from None
             raise
         try:  # any failure from here (memory too) removes the unpacked FMU
             self.messages: list[tuple[str, str]] = []  # (status, message)

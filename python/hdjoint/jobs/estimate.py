@@ -161,7 +161,8 @@ def _estimate_locked(opts: Options) -> Estimated:
     if blocks.wild:
         shown = ", ".join(f"line {line} {name} = {value:.4g}" for name, line, value in blocks.wild[:5])
         more = f" and {len(blocks.wild) - 5} more" if len(blocks.wild) > 5 else ""
-        print(f"warning: {printable(opts.recording)}: {len(blocks.wild)} wild sample{'s' if len(blocks.wild) > 1 else ''} "
+        print(f"warning: {printable(opts.recording)}: {len(blocks.wild)} "
+              f"wild sample{'s' if len(blocks.wild) > 1 else ''} "
               f"({shown}{more}): the estimates around them are unreliable (hdjoint diagnose leaves such samples "
               "out)", file=sys.stderr)
     if ts_from_recording and abs(blocks.ts - 1e-3) > 1e-9:
