@@ -111,7 +111,7 @@ def test_a_fleet_where_every_recording_failed_exits_1(tmp_path):
     for _ in range(2):  # computed, then found failed from the first run
         run = subprocess.run(argv, check=False, capture_output=True, text=True)
         assert run.returncode == 1, run.stderr
-        assert "every recording failed" in run.stderr and "'oops' is not a number" in run.stderr
+        assert "every recording failed" in run.stderr and "line 2, column theta_m: not a number" in run.stderr
 
 
 def test_a_fleet_out_that_is_a_file_is_refused_before_the_cluster(tmp_path, recording, capsys):

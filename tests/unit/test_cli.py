@@ -253,7 +253,7 @@ def _short_row(data_row):
 
 MALFORMED = [
     # (id, edit, fragments the one-line message must hold)
-    ("bad-number", _set_cell("theta_l", 16, "abc"), ["line 18", "column theta_l", "'abc'"]),
+    ("bad-number", _set_cell("theta_l", 16, "abc"), ["line 18", "column theta_l", "not a number"]),
     ("nan-current", _set_cell("i_m", 3, "nan"), ["line 5", "column i_m"]),
     ("empty-cell", _set_cell("theta_m", 100, ""), ["line 102", "column theta_m"]),
     ("bad-sensor", _set_cell("tau_sensor", 40, "1.2.3"), ["line 42", "column tau_sensor"]),

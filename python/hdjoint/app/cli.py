@@ -10,8 +10,9 @@ import os
 import signal
 import sys
 
-from hdjoint.io.outputs import OutputError
-from hdjoint.jobs.inputs import UserError, check_output_file, locked_output, read_params as _params
+from hdjoint.app.outcome import TOLD, told
+from hdjoint.io.outputs import printable
+from hdjoint.jobs.inputs import UserError, check_output_file, locked_output, read_params as _params, written_folder
 from hdjoint.fleet.cli import help_formatter, subcommand, whole_number
 from hdjoint.io.timebase import TIME_UNITS
 
@@ -26,8 +27,10 @@ def cmd_fmus(args) -> int:
     from hdjoint.api import export_fmus
     from hdjoint.fmu.shipped import FMI_VERSIONS
     versions = FMI_VERSIONS if args.fmi == "both" else (int(args.fmi),)
-    for path in export_fmus(args.out, versions):
-        print(path)
+    with written_folder(args.out):
+        written = export_fmus(args.out, versions)
+    for path in written:
+        print(printable(path))
     return 0
 
 
@@ -40,7 +43,7 @@ def cmd_simulate(args) -> int:
     with locked_output(args.output):
         rec = simulate(args.experiment, params=nominal, joint=joint, duration=args.duration, seed=args.seed)
         rec.save(args.output)
-    print(f"{args.output}: {len(rec)} samples, {rec.duration:.3f} s ({args.experiment})")
+    print(f"{printable(args.output)}: {len(rec)} samples, {rec.duration:.3f} s ({args.experiment})")
     return 0
 
 
@@ -83,7 +86,7 @@ def cmd_estimate(args) -> int:
         for name, fig in figures.items():
             print(f"{name:<16} {fig.rms:>10.4f} {fig.max:>10.4f}")
     else:
-        print(f"wrote {args.output} (the recording has no tau_sensor: no error figures)")
+        print(f"wrote {printable(args.output)} (the recording has no tau_sensor: no error figures)")
     return 0
 
 
@@ -93,7 +96,7 @@ def cmd_diagnose(args) -> int:
                    current_sign=args.current_sign, out=args.out).document
     for line in diagnosis_lines(doc):
         print(line)
-    print(f"wrote {args.out}/findings.json, params.json, params.ssv, report.html ({doc['seconds']} s)")
+    print(f"wrote {printable(args.out)}/findings.json, params.json, params.ssv, report.html ({doc['seconds']} s)")
     return 0
 
 
@@ -118,7 +121,8 @@ def cmd_demo(args) -> int:
     from pathlib import Path
 
     from hdjoint.app.demo import run_demo
-    run_demo(Path(args.out))
+    with written_folder(args.out):
+        run_demo(Path(args.out))
     return 0
 
 
@@ -271,12 +275,8 @@ def main(argv=None) -> int:
         pass
     try:
         return args.run(args)
-    except (UserError, OutputError) as e:
-        print(f"hdjoint {args.command}: {e}", file=sys.stderr)
-        return 2
-    except (OSError, RuntimeError, ValueError) as e:
-        print(f"hdjoint {args.command}: {e}", file=sys.stderr)
-        return 1
+    except TOLD as e:  # one line, one exit-code layer for every command (app/outcome.py)
+        return told(args.command, e)
     except KeyboardInterrupt:  # one line, no traceback; the jobs' cleanups have run
         print(f"hdjoint {args.command}: interrupted (SIGINT); no output was left half-written", file=sys.stderr)
         return 128 + signal.SIGINT

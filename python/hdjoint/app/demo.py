@@ -19,6 +19,7 @@ from hdjoint.io import figures as plots
 from hdjoint.io import parameters
 from hdjoint.io.recording import write_csv, write_recording
 from hdjoint.jobs.paper_calibration import sensorless_set
+from hdjoint.io.outputs import printable, write_whole
 
 
 def _say(message: str) -> None:
@@ -28,7 +29,7 @@ def _say(message: str) -> None:
 def run_demo(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
-    _say(f"[1/5] FMUs -> {out / 'fmus'}")
+    _say(f"[1/5] FMUs -> {printable(out / 'fmus')}")
     export_fmus(out / "fmus")
 
     _say("[2/5] simulating the paper experiment (HarmonicDriveJoint.fmu under position control, 58 s)")
@@ -44,7 +45,7 @@ def run_demo(out: Path) -> None:
     _say("[4/5] the paper's table: compliance model vs UKF (default and fairly tuned), tau_hat, tau_smooth, "
          "and tau_hat after a sensorless calibration on another run")
     table = reproduce(rec, calibrated=sensorless_set(rec, out))  # calibrated on another run, no torque sensor
-    (out / "paper_table.md").write_text(table.markdown() + "\n")
+    write_whole(out / "paper_table.md", table.markdown() + "\n")
     plots.save(plots.torque_comparison(rec.time, table.estimates, "Paper experiment: estimates vs true torque"),
                out / "paper_torque.png")
     print(table.markdown())
@@ -52,7 +53,7 @@ def run_demo(out: Path) -> None:
     print(f"tuned UKF settings: {parameters.values_in_text(table.tuned_settings)}")
 
     _mission(out)
-    print(f"outputs in {out} ({time.perf_counter() - started:.1f} s); open {out / 'index.html'}")
+    print(f"outputs in {printable(out)} ({time.perf_counter() - started:.1f} s); open {printable(out / 'index.html')}")
 
 
 def _mission(out: Path) -> None:

@@ -10,6 +10,7 @@ from pathlib import Path
 from hdjoint.app.demo_story import DURATION, FIRST, HIDDEN, SECOND, Story
 from hdjoint.diagnosis import INTERVAL
 from hdjoint.io import parameters
+from hdjoint.io.outputs import write_whole
 
 TITLE = "hdjoint demo: a hidden effect named, modelled and closed without a torque sensor"
 # The files a reader opens next, with what each one is.
@@ -95,7 +96,7 @@ def summary_lines(story: Story) -> list[str]:
 def write_summary(out: Path, story: Story) -> None:
     lines = [f"# {TITLE}", "", *[f"- {line}" for line in summary_lines(story)], "",
              *[f"- [{target}]({target}): {what}" for target, what in LINKS]]
-    (out / "summary.md").write_text("\n".join(lines) + "\n")
+    write_whole(out / "summary.md", "\n".join(lines) + "\n")
 
 
 def write_index(out: Path, story: Story) -> None:
@@ -109,4 +110,4 @@ def write_index(out: Path, story: Story) -> None:
             "#summary{border:3px solid #446;padding:0.3em 1em;margin-bottom:1em}li{margin:0.3em 0}</style></head>"
             f"<body><section id='summary'><h1>{html.escape(TITLE)}</h1><ul>{items}</ul></section>"
             f"<section><h2>Files</h2><ul>{links}</ul></section>{figures}</body></html>\n")
-    (out / "index.html").write_text(page)
+    write_whole(out / "index.html", page)

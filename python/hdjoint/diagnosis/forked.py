@@ -58,7 +58,21 @@ def _start_piece() -> None:
     """A pool's child: one core's worth of work, and Ctrl-C the parent's to handle."""
     global _in_piece
     _in_piece = True
+    _die_with_parent()
     _quiet_on_ctrl_c()
+
+
+def _die_with_parent() -> None:
+    """In a child: killed when its parent ends, also by SIGKILL (Linux's
+    PR_SET_PDEATHSIG), so no orphan computes on holding the run's output lock."""
+    try:
+        import ctypes
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL, 0, 0, 0)  # 1: PR_SET_PDEATHSIG
+    except (OSError, AttributeError):  # not Linux: the helper still ends at the end of its pipe
+        return
+    parent = multiprocessing.parent_process()
+    if parent is not None and os.getppid() != parent.pid:  # the parent ended before the line above
+        os._exit(1)
 
 
 def _quiet_on_ctrl_c() -> None:
@@ -227,6 +241,7 @@ class Helper:
 
     @staticmethod
     def _serve(connection, prepare: Callable[[], None]) -> None:
+        _die_with_parent()
         _quiet_on_ctrl_c()
         signal.signal(signal.SIGTERM, _exit_on_sigterm)  # its own children are ended on the way out
         os.nice(HELPER_NICENESS)

@@ -8,6 +8,8 @@ import sys
 
 import numpy as np
 
+from hdjoint.io.outputs import printable
+
 INPUTS = ("i_m", "theta_m", "theta_l")
 SHOWN_WARNINGS = 5
 
@@ -15,9 +17,9 @@ SHOWN_WARNINGS = 5
 def warn_fmu_messages(path, messages) -> None:
     """The FMU's fmi2Warning messages (e.g. an outlier sample the joint-state filter predicted over)."""
     for message in messages[:SHOWN_WARNINGS]:
-        print(f"warning: {path}: {message}", file=sys.stderr)
+        print(f"warning: {printable(path)}: {message}", file=sys.stderr)
     if len(messages) > SHOWN_WARNINGS:
-        print(f"warning: {path}: {len(messages) - SHOWN_WARNINGS} more warnings", file=sys.stderr)
+        print(f"warning: {printable(path)}: {len(messages) - SHOWN_WARNINGS} more warnings", file=sys.stderr)
 
 
 class RejectedSamples:
@@ -42,10 +44,12 @@ class RejectedSamples:
 
     def warn(self) -> None:
         if self.count["rejected"]:
-            print(f"warning: {self.path}: the joint-state filter rejected {self.count['rejected']} outlier sample(s) "
+            print(f"warning: {printable(self.path)}: the joint-state filter rejected {self.count['rejected']} "
+                  "outlier sample(s) "
                   f"and predicted over them (at {self._where('rejected')}); tau_hat_std grows there", file=sys.stderr)
         if self.count["held"]:
-            print(f"warning: {self.path}: {self.count['held']} row(s) step over more than one sample (a gap, at "
+            print(f"warning: {printable(self.path)}: {self.count['held']} row(s) step over more than one sample "
+                  "(a gap, at "
                   f"{self._where('held')}): the filters predicted over the samples without a reading; "
                   "tau_ukf_std and tau_hat_std grow there", file=sys.stderr)
 

@@ -8,11 +8,14 @@ smoothed torque and its deviation) and a block; the same numbers as the
 smoother on the whole recording in memory (_core.run_estimator(smooth=True))."""
 from __future__ import annotations
 
+import contextlib
+import errno
 import os
+import tempfile
 
 import numpy as np
 
-from hdjoint.io.outputs import temp_dir
+from hdjoint.io.outputs import printable, temp_dir
 
 BACKWARD_BLOCK = 8192  # records read at a time (8 MB)
 SMOOTH_COLUMNS = ("tau_smooth", "tau_smooth_std")
@@ -28,9 +31,16 @@ class SmoothedRows:
         self.params, self.outputs = params, list(outputs)
         self.record_values = _core.RECORD_VALUES
         # Named with the pid: a run killed outright leaves it, and the next run removes it.
-        self._dir = temp_dir("hdjoint-smooth")
-        self._rows = open(os.path.join(self._dir.name, "rows.f8"), "w+b")
-        self._records = open(os.path.join(self._dir.name, "records.f8"), "w+b")
+        with self._temporary_space():
+            self._dir = temp_dir("hdjoint-smooth")
+        self._rows = self._records = None
+        try:
+            with self._temporary_space():
+                self._rows = open(os.path.join(self._dir.name, "rows.f8"), "w+b")
+                self._records = open(os.path.join(self._dir.name, "records.f8"), "w+b")
+        except BaseException:
+            self.close()
+            raise
         # Per row: time, outputs, last_record (global), sensor (NaN without one).
         self._width = 1 + len(self.outputs) + 2
         self._segments = [0]  # the first record of each segment, then the total
@@ -42,17 +52,33 @@ class SmoothedRows:
         table = np.column_stack([time, *(outputs[name] for name in self.outputs),
                                  np.where(local >= 0, local + offset, -1.0),
                                  sensor if sensor is not None else np.full(len(time), np.nan)])
-        table.astype(np.float64).tofile(self._rows)
         records = np.asarray(outputs["records"], dtype=np.float64)
-        records.tofile(self._records)
+        with self._temporary_space():
+            table.astype(np.float64).tofile(self._rows)
+            records.tofile(self._records)
         self._records_written += len(records)
+
+    @contextlib.contextmanager
+    def _temporary_space(self):
+        """A write into the temporary folder that fails (numpy's short write says only "N requested and M
+        written") told plainly: the folder is full, named, with what it takes."""
+        try:
+            yield
+        except OSError as e:
+            folder = tempfile.gettempdir()
+            if e.errno in (None, errno.ENOSPC, errno.EDQUOT):
+                raise OSError(errno.ENOSPC, f"the temporary folder {printable(folder)} is full: --smooth keeps about "
+                                            f"{8 * self.record_values // 1000} kB a sample there for its backward "
+                                            "pass; free room there or set TMPDIR to a folder with room") from None
+            raise OSError(e.errno, f"the temporary folder {printable(folder)}: {e.strerror}") from None
 
     def end_segment(self) -> None:
         self._segments.append(self._records_written)
 
     def _backward(self) -> tuple[np.ndarray, np.ndarray]:
         from hdjoint import _core
-        self._records.flush()
+        with self._temporary_space():
+            self._records.flush()
         n = self._records_written
         tau, tau_std = np.empty(n), np.empty(n)
         row_bytes = 8 * self.record_values
@@ -70,7 +96,8 @@ class SmoothedRows:
     def rows(self, block_rows: int):
         """(time, {output and smoothed column: values}, sensor (NaN without one)) a block at a time."""
         tau, tau_std = self._backward()
-        self._rows.flush()
+        with self._temporary_space():
+            self._rows.flush()
         self._rows.seek(0)
         hat, hat_std = self.outputs.index("tau_hat"), self.outputs.index("tau_hat_std")
         while True:
@@ -86,9 +113,15 @@ class SmoothedRows:
             yield table[:, 0], columns, table[:, -1]
 
     def close(self) -> None:
-        self._rows.close()
-        self._records.close()
-        self._dir.cleanup()
+        try:
+            for f in (self._rows, self._records):
+                if f is not None:
+                    try:
+                        f.close()  # flushes: on a full folder this fails too, and the files go all the same
+                    except OSError:
+                        pass
+        finally:
+            self._dir.cleanup()
 
     def __enter__(self):
         return self

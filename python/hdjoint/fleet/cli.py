@@ -19,7 +19,8 @@ def _common(p) -> None:
     where = p.add_mutually_exclusive_group()
     where.add_argument("--scheduler", metavar="ADDR", help="a running Dask scheduler (tcp://host:8786)")
     where.add_argument("--workers", type=int, metavar="N",
-                       help="worker processes of the local cluster (default: one per core)")
+                       help=f"worker processes of the local cluster, at most {WORKERS_PER_CORE} a core "
+                            "(default: one per core)")
     p.add_argument("--allowed-failures", type=int, default=None, metavar="K",
                    help="worker deaths one recording may cause before it is marked failed (local cluster; "
                         "default 2)")
@@ -29,19 +30,21 @@ def _common(p) -> None:
 def cmd_fleet(args) -> int:
     from hdjoint.jobs.inputs import UserError
     from hdjoint.fleet.run import ALLOWED_FAILURES, run_fleet
-    if args.workers is not None and args.workers < 1:
-        raise UserError(f"--workers must be at least 1, not {args.workers}")
+    if args.workers is not None and not 1 <= args.workers <= max_workers():
+        raise UserError(f"--workers {args.workers}: must be from 1 to {max_workers()} ({WORKERS_PER_CORE} a core "
+                        f"on this machine's {available_cores()}); each worker is a process")
     options = {"engine": args.engine} if args.fleet_command == "estimate" else {}
     summary = run_fleet(args.fleet_command, args.recordings, args.out, params_map=args.params_map,
                         joint_pattern=args.joint_pattern, scheduler=args.scheduler, workers=args.workers,
                         options=options, show_progress=not args.quiet,
                         allowed_failures=ALLOWED_FAILURES if args.allowed_failures is None else args.allowed_failures)
+    from hdjoint.io.outputs import printable
     print(f"{len(summary.rows)} recordings: {summary.computed} processed now, {summary.cached} done earlier, "
-          f"{summary.failed} failed; wrote {summary.parquet} and {summary.html}")
+          f"{summary.failed} failed; wrote {printable(summary.parquet)} and {printable(summary.html)}")
     if summary.rows and summary.failed == len(summary.rows):
         first = next(r for r in summary.rows if r.get("status") != "ok")
-        print(f"hdjoint fleet: every recording failed ({summary.failed}); the first, {first['recording']}: "
-              f"{first.get('error')}", file=sys.stderr)
+        print(printable(f"hdjoint fleet: every recording failed ({summary.failed}); the first, {first['recording']}: "
+                        f"{first.get('error')}"), file=sys.stderr)
         return 1
     from hdjoint.fleet.trend import rank_joints
     for d in rank_joints(summary.rows)[:5]:
@@ -51,11 +54,27 @@ def cmd_fleet(args) -> int:
     return 0
 
 
+# The most worker processes a local cluster is given, per core: beyond, they only contend for the cores and memory.
+WORKERS_PER_CORE = 4
+
+
+def available_cores() -> int:
+    import os
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+def max_workers() -> int:
+    return WORKERS_PER_CORE * available_cores()
+
+
 def cmd_generate(args) -> int:
     from hdjoint.fleet.generate import JOINT_PATTERN, generate
-    path = generate(args.out, joints=args.joints, days=args.days, duration=args.duration,
-                    progress=lambda m: print(f"[generate] {m}", file=sys.stderr, flush=True))
-    print(f"wrote {args.joints} joints x {args.days} days under {args.out}; params map {path}")
+    from hdjoint.jobs.inputs import written_folder
+    with written_folder(args.out, "OUT"):
+        path = generate(args.out, joints=args.joints, days=args.days, duration=args.duration,
+                        progress=lambda m: print(f"[generate] {m}", file=sys.stderr, flush=True))
+    from hdjoint.io.outputs import printable
+    print(f"wrote {args.joints} joints x {args.days} days under {printable(args.out)}; params map {printable(path)}")
     print(f"try: hdjoint fleet diagnose '{args.out}/logs/**/*.csv' --params-map {path} "
           f"--joint-pattern '{JOINT_PATTERN}' --out FLEET")
     return 0

@@ -13,6 +13,7 @@ from hdjoint.fmu import concealed_effects as cases, experiments
 from hdjoint.io import parameters
 from hdjoint.diagnosis import KINEMATIC_EQ7
 from hdjoint.io.recording import write_recording
+from hdjoint.io.outputs import write_whole
 
 
 @dataclass(frozen=True)
@@ -66,7 +67,7 @@ def generate(out: str | Path, joints: int = 4, days: int = 6, duration: float = 
             write_recording(path, rec)
             if progress:
                 progress(str(path))  # the path as written (OUT/logs/...), not relative to OUT
-    (out / "truth.json").write_text(json.dumps({"drifts": truth_doc, "joint_pattern": JOINT_PATTERN}, indent=2))
+    write_whole(out / "truth.json", json.dumps({"drifts": truth_doc, "joint_pattern": JOINT_PATTERN}, indent=2))
     map_path = out / "params-map.json"
-    map_path.write_text(json.dumps(pmap, indent=2) + "\n")
+    write_whole(map_path, json.dumps(pmap, indent=2) + "\n")
     return map_path

@@ -20,6 +20,7 @@ from dataclasses import dataclass, replace
 from datetime import datetime, timezone
 from pathlib import Path
 
+from hdjoint.io.outputs import printable
 from hdjoint.jobs.inputs import UserError
 
 
@@ -86,11 +87,18 @@ class ParamsMap:
 
 
 def read_params_map(path: str | os.PathLike) -> ParamsMap:
+    from hdjoint.io.parameters import MAX_FILE_BYTES, read_small_file
     path = Path(path)
     try:
-        data = json.loads(path.read_text())
+        text = read_small_file(path)
+        if text is None:
+            raise UserError(f"{printable(path)}: larger than {MAX_FILE_BYTES // 1024} kB; a params map is a small "
+                            "JSON object (is this a params map?)")
+        data = json.loads(text)
     except OSError as e:
-        raise UserError(f"{path}: cannot read the params map ({e.strerror})") from None
+        raise UserError(f"{printable(path)}: cannot read the params map ({e.strerror})") from None
+    except UnicodeDecodeError as e:
+        raise UserError(f"{printable(path)}: not UTF-8 text ({e.reason} at byte {e.start})") from None
     except json.JSONDecodeError as e:
         raise UserError(f"{path}: line {e.lineno}, column {e.colno}: not valid JSON ({e.msg})") from None
     if not isinstance(data, dict) or not data:
@@ -175,6 +183,6 @@ def plan(patterns: list[str], params_map: str | None, joint_pattern: str | None,
         used = {pmap.match(rec)[0] for rec in recordings}
         for pattern, _, _ in pmap.entries:
             if pattern not in used:
-                print(f"warning: {params_map}: pattern '{pattern}' is used for none of the recordings",
+                print(f"warning: {printable(params_map)}: pattern '{pattern}' is used for none of the recordings",
                       file=sys.stderr)
     return jobs

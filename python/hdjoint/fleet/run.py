@@ -144,8 +144,8 @@ def run_fleet(command: str, patterns: list[str], out: str | os.PathLike, params_
     """Process every recording matching PATTERNS; return the summary. Rows
     found under OUT from an earlier run (same contents, same command) are reused."""
     options = dict(options or {})
+    check_output_directory(out, FLEET_FILES)  # empty, a file, an unwritable place: before any work
     out = str(Path(out).resolve())
-    check_output_directory(out, FLEET_FILES)  # a file, an unwritable place: before any work
     if scheduler:
         check_scheduler(scheduler)
     jobs = plan(patterns, params_map, joint_pattern, out=out)

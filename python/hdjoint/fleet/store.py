@@ -8,7 +8,6 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import tempfile
 from pathlib import Path
 
 from importlib.metadata import PackageNotFoundError, version
@@ -44,19 +43,20 @@ def result_key(command: str, recording: str, params: str | None, options: dict) 
 
 
 def atomic_write(path: str | os.PathLike, data: bytes) -> None:
+    """DATA into PATH through a temporary file beside it (never through or over a link: io.outputs)."""
+    from hdjoint.io.outputs import open_temp, replace_into
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    f, tmp = open_temp(path, binary=True)
     try:
-        with os.fdopen(fd, "wb") as f:
+        with f:
             f.write(data)
             f.flush()
             os.fsync(f.fileno())
         os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
+        replace_into(tmp, path)
+    finally:
         Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def row_path(out: str | os.PathLike, key: str) -> Path:

@@ -77,27 +77,35 @@ class FmuInstance:
         try:
             self._unzipdir = extract(str(self.path), unzipdir=unzipdir,
                                      include=lambda name: not name.startswith("sources/"))
-        except OSError as e:  # a full temporary folder
+        except BaseException as e:  # a full temporary folder, memory
             shutil.rmtree(unzipdir, ignore_errors=True)
-            raise OSError(e.errno, f"cannot unpack {self.path.name} into {unzipdir} (TMPDIR): {e.strerror}") from None
-        self.messages: list[tuple[str, str]] = []  # (status, message)
-        self._environment = next(_ENVIRONMENTS)
-        _MESSAGES[self._environment] = self.messages
-        self._callbacks = fmi2CallbackFunctions()
-        self._callbacks.logger = _DISPATCHER
-        self._callbacks.componentEnvironment = self._environment
-        self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-        self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        try:
-            from fmpy.logging import addLoggerProxy  # formats the printf-style message in C
-            addLoggerProxy(ctypes.byref(self._callbacks))
-        except Exception:  # pragma: no cover - fmpy without its logging helper
-            pass
-        self.slave = FMU2Slave(guid=self.description.guid, unzipDirectory=self._unzipdir,
-                               modelIdentifier=self.description.coSimulation.modelIdentifier,
-                               instanceName=instance_name)
-        self.slave.instantiate(callbacks=self._callbacks, loggingOn=logging_on)
-        self._terminated = False
+            if isinstance(e, OSError):
+                raise OSError(e.errno, f"cannot unpack {self.path.name} into {unzipdir} (TMPDIR): "
+                                       f"{e.strerror}") from None
+            raise
+        try:  # any failure from here (memory too) removes the unpacked FMU
+            self.messages: list[tuple[str, str]] = []  # (status, message)
+            self._environment = next(_ENVIRONMENTS)
+            _MESSAGES[self._environment] = self.messages
+            self._callbacks = fmi2CallbackFunctions()
+            self._callbacks.logger = _DISPATCHER
+            self._callbacks.componentEnvironment = self._environment
+            self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+            self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+            try:
+                from fmpy.logging import addLoggerProxy  # formats the printf-style message in C
+                addLoggerProxy(ctypes.byref(self._callbacks))
+            except Exception:  # pragma: no cover - fmpy without its logging helper
+                pass
+            self.slave = FMU2Slave(guid=self.description.guid, unzipDirectory=self._unzipdir,
+                                   modelIdentifier=self.description.coSimulation.modelIdentifier,
+                                   instanceName=instance_name)
+            self.slave.instantiate(callbacks=self._callbacks, loggingOn=logging_on)
+            self._terminated = False
+        except BaseException:
+            _MESSAGES.pop(getattr(self, "_environment", None), None)
+            shutil.rmtree(unzipdir, ignore_errors=True)
+            raise
 
     def last_error(self) -> str:
         for status, message in reversed(self.messages):
@@ -139,12 +147,14 @@ class FmuInstance:
         if not self._terminated:
             self._terminated = True
             try:
-                self.slave.terminate()
-            except Exception:
-                pass
-            self.slave.freeInstance()
-            _MESSAGES.pop(self._environment, None)
-            shutil.rmtree(self._unzipdir, ignore_errors=True)
+                try:
+                    self.slave.terminate()
+                except Exception:
+                    pass
+                self.slave.freeInstance()
+            finally:
+                _MESSAGES.pop(self._environment, None)
+                shutil.rmtree(self._unzipdir, ignore_errors=True)
 
     def __enter__(self):
         return self

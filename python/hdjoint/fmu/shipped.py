@@ -38,17 +38,23 @@ def export_fmus(out_dir: str | Path, fmi: tuple[int, ...] = FMI_VERSIONS) -> lis
     """Copy every FMU of the FMI versions `fmi` into out_dir (each through a
     temporary file, never over a device node, a FIFO or a read-only file);
     returns the written paths."""
-    from hdjoint.io.outputs import check_replaceable, replace_into, temp_path
+    from hdjoint.io.outputs import check_replaceable, open_temp, replace_into, write_error
     out = Path(out_dir)
     pairs = [(name, version, out / fmu_file_name(name, version)) for version in fmi for name in FMU_NAMES]
     for _, _, target in pairs:
         check_replaceable(target)  # before anything is written
     out.mkdir(parents=True, exist_ok=True)
     for name, version, target in pairs:
-        tmp = temp_path(target)
         try:
-            shutil.copyfile(fmu_path(name, version), tmp)
+            f, tmp = open_temp(target, binary=True)
+        except OSError as e:
+            raise write_error(target, e) from None
+        try:
+            with f, open(fmu_path(name, version), "rb") as src:
+                shutil.copyfileobj(src, f)
             replace_into(tmp, target)
+        except OSError as e:  # a full disk: named with the FMU it was writing
+            raise write_error(target, e) from None
         finally:
             Path(tmp).unlink(missing_ok=True)
     return [target for _, _, target in pairs]

@@ -4,6 +4,7 @@ only by what needs its figure registry: a report draws on bare Figures."""
 from __future__ import annotations
 
 import io
+import os
 import base64
 
 import numpy as np
@@ -61,8 +62,12 @@ def envelope(x: np.ndarray, y: np.ndarray, buckets: int = ENVELOPE_BUCKETS) -> t
 
 
 def save(fig, path) -> None:
-    fig.savefig(path, dpi=110)
+    """FIG as an image at PATH (its format from the suffix), written whole (io.outputs.write_whole)."""
+    from hdjoint.io.outputs import write_whole
+    buf = io.BytesIO()
+    fig.savefig(buf, format=os.path.splitext(os.fspath(path))[1].lstrip(".") or "png", dpi=110)
     _pyplot().close(fig)
+    write_whole(path, buf.getvalue())
 
 
 def png_data_uri(fig) -> str:

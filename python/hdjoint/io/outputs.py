@@ -30,22 +30,49 @@ def _kind(mode: int) -> str:
     return "not a regular file"
 
 
+def printable(text) -> str:
+    """TEXT (a path or a message) as one printable line: control characters
+    (a newline, a terminal escape) and other unprintable ones escaped as
+    repr does (\\n, \\x1b), so a file name can neither split a one-line
+    message nor reach the terminal as a command."""
+    text = os.fsdecode(text) if isinstance(text, (bytes, os.PathLike)) else str(text)
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+
+
+def _refusal(path, mode: int) -> str | None:
+    """Why an existing entry of MODE (from lstat) at PATH must not be replaced, or None."""
+    shown = printable(path)
+    if stat.S_ISLNK(mode):
+        return (f"{shown}: is a symbolic link; outputs are never written through or over a link "
+                "(name the file itself)")
+    if not stat.S_ISREG(mode):
+        return f"{shown}: is {_kind(mode)}; outputs are written only as regular files (choose a file name)"
+    if not mode & 0o222:
+        return (f"{shown}: is read-only (mode {stat.S_IMODE(mode):04o}); refusing to replace it "
+                "(make it writable or choose another output)")
+    return None
+
+
 def check_replaceable(path) -> None:
     """Refuse PATH when it exists and is anything but a writable regular file:
-    a device node or a FIFO is never replaced by a file, a read-only file is
+    a symbolic link (not followed: the link itself would be replaced), a
+    device node or a FIFO is never replaced by a file, a read-only file is
     never replaced (its mode says not to, also to root)."""
+    if not os.fspath(path):
+        raise OutputError("the output path is empty; name a file or folder")
     try:
-        st = os.stat(path)  # follows a symlink: what the user would be writing over
+        st = os.lstat(path)
     except FileNotFoundError:
         return
     except OSError as e:
-        raise OutputError(f"{path}: cannot inspect the output ({e.strerror})") from None
-    if not stat.S_ISREG(st.st_mode):
-        raise OutputError(f"{path}: is {_kind(st.st_mode)}; outputs are written only as regular files "
-                          "(choose a file name)")
-    if not st.st_mode & 0o222 or not os.access(path, os.W_OK):
-        raise OutputError(f"{path}: is read-only (mode {stat.S_IMODE(st.st_mode):04o}); refusing to replace it "
-                          "(make it writable or choose another output)")
+        raise OutputError(f"{printable(path)}: cannot inspect the output ({e.strerror})") from None
+    reason = _refusal(path, st.st_mode)
+    if reason is None and not os.access(path, os.W_OK):
+        reason = f"{printable(path)}: is not writable; refusing to replace it (choose another output)"
+    if reason:
+        raise OutputError(reason)
 
 
 def file_mode(path, default: int | None = None) -> int:
@@ -127,11 +154,118 @@ def _remove(path: str) -> None:
         pass
 
 
+class _Directory:
+    """A directory held open: entries are made, inspected and renamed relative
+    to this handle (never through a path resolved twice)."""
+
+    def __init__(self, path):
+        self.path = os.path.dirname(os.path.abspath(os.fspath(path))) or "/"
+        self.fd = os.open(self.path, os.O_RDONLY | os.O_DIRECTORY | os.O_CLOEXEC)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        os.close(self.fd)
+
+    def lstat(self, name: str):
+        try:
+            return os.stat(name, dir_fd=self.fd, follow_symlinks=False)
+        except FileNotFoundError:
+            return None
+
+
+def open_temp(path, binary: bool = False):
+    """A new temporary file next to PATH, open for writing: (file, its path).
+    Created with O_EXCL and O_NOFOLLOW relative to the folder's handle: it
+    never opens an existing file or a link."""
+    tmp = temp_path(path)
+    with _Directory(tmp) as d:
+        fd = os.open(os.path.basename(tmp), os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW | os.O_CLOEXEC,
+                     0o666, dir_fd=d.fd)
+    try:
+        return (open(fd, "wb") if binary else open(fd, "w", newline="", encoding="utf-8")), tmp
+    except BaseException:
+        os.close(fd)
+        raise
+
+
+_RENAME_NOREPLACE, _RENAME_EXCHANGE = 1, 2
+
+
+def _renameat2(src: _Directory, old: str, dst: _Directory, new: str, flags: int) -> bool:
+    """renameat2(2) with FLAGS; False where the system or the file system lacks it (then the caller renames)."""
+    global _renameat2_call
+    if _renameat2_call is None:
+        try:
+            import ctypes
+            libc = ctypes.CDLL(None, use_errno=True)
+            call = libc.renameat2
+            call.argtypes = (ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p, ctypes.c_uint)
+            _renameat2_call = (call, ctypes)
+        except (OSError, AttributeError):
+            _renameat2_call = False
+    if not _renameat2_call:
+        return False
+    call, ctypes = _renameat2_call
+    if call(src.fd, os.fsencode(old), dst.fd, os.fsencode(new), flags) == 0:
+        return True
+    err = ctypes.get_errno()
+    if err in (errno.ENOSYS, errno.EINVAL, errno.ENOTSUP):
+        return False
+    raise OSError(err, os.strerror(err), new)
+
+
+_renameat2_call = None
+
+
 def replace_into(tmp, path) -> None:
     """Move the finished TMP over PATH in one step, with PATH's mode when it
-    exists (an existing file keeps its permissions)."""
-    os.chmod(tmp, file_mode(path))
-    os.replace(tmp, path)
+    exists (an existing file keeps its permissions). Relative to the folders'
+    handles, and never over a link, a device or a read-only file, even one
+    put there since PATH was checked: a new PATH is created only if still
+    absent (RENAME_NOREPLACE); an existing one is exchanged with TMP and,
+    should what comes back not be a writable regular file, exchanged back
+    and refused (OutputError)."""
+    tname, name = os.path.basename(os.fspath(tmp)), os.path.basename(os.path.abspath(os.fspath(path)))
+    with _Directory(tmp) as src, _Directory(path) as dst:
+        st = dst.lstat(name)
+        if st is not None and (reason := _refusal(path, st.st_mode)):
+            raise OutputError(reason)
+        os.chmod(tname, stat.S_IMODE(st.st_mode) if st is not None else file_mode(path), dir_fd=src.fd)
+        if st is None:
+            try:
+                if _renameat2(src, tname, dst, name, _RENAME_NOREPLACE):
+                    return
+            except FileExistsError:  # something appeared there meanwhile: look again
+                return replace_into(tmp, path)
+        elif _renameat2(src, tname, dst, name, _RENAME_EXCHANGE):
+            swapped = src.lstat(tname)  # what was at PATH, now at TMP's name
+            reason = _refusal(path, swapped.st_mode) if swapped is not None else None
+            if reason:
+                _renameat2(src, tname, dst, name, _RENAME_EXCHANGE)
+                raise OutputError(reason)
+            os.unlink(tname, dir_fd=src.fd)
+            return
+        os.replace(tname, name, src_dir_fd=src.fd, dst_dir_fd=dst.fd)
+
+
+def write_whole(path, data: str | bytes) -> None:
+    """DATA (text as UTF-8) into PATH in one step through open_temp and
+    replace_into: never through or over a link, a device or a read-only
+    file; on any failure (OutputError naming PATH) nothing is left."""
+    check_replaceable(path)
+    tmp = None
+    try:
+        f, tmp = open_temp(path, binary=isinstance(data, bytes))
+        with f:
+            f.write(data)
+        replace_into(tmp, path)  # an existing file keeps its mode; a new one as the umask says
+    except OSError as e:
+        raise write_error(path, e) from None
+    finally:
+        if tmp and os.path.lexists(tmp):
+            os.unlink(tmp)
 
 
 def write_error(path, exc: OSError) -> OutputError:
@@ -139,7 +273,7 @@ def write_error(path, exc: OSError) -> OutputError:
     reason = exc.strerror or str(exc)
     if exc.errno in (errno.ENOSPC, errno.EDQUOT):
         reason += " (the disk is full)"
-    return OutputError(f"cannot write {path}: {reason}; nothing was written")
+    return OutputError(f"cannot write {printable(path)}: {reason}; nothing was written")
 
 
 class OutputLock:
@@ -160,16 +294,21 @@ class OutputLock:
 
     def acquire(self) -> "OutputLock":
         while True:
-            try:
-                fd = os.open(self.lock_path, os.O_RDWR | os.O_CREAT, 0o644)
+            try:  # never through a link planted under the lock's name (it is truncated below)
+                fd = os.open(self.lock_path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)
             except OSError as e:
-                raise OutputError(f"{self.path}: cannot lock the output ({e.strerror})") from None
+                raise OutputError(f"{printable(self.path)}: cannot lock the output ({printable(self.lock_path)}: "
+                                  f"{'a symbolic link' if e.errno == errno.ELOOP else e.strerror})") from None
+            if not stat.S_ISREG(os.fstat(fd).st_mode):
+                os.close(fd)
+                raise OutputError(f"{printable(self.path)}: cannot lock the output ({printable(self.lock_path)} "
+                                  "is not a regular file)")
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except BlockingIOError:
                 holder = os.read(fd, 32).decode(errors="replace").strip() or "?"
                 os.close(fd)
-                raise OutputError(f"{self.path}: another hdjoint run (pid {holder}) is writing this output; "
+                raise OutputError(f"{printable(self.path)}: another hdjoint run (pid {holder}) is writing this output; "
                                   "wait for it to finish or choose another output") from None
             # The holder before us may have removed the lock file after we opened it: lock the file on disk.
             try:

@@ -8,10 +8,10 @@ import os
 import re
 from dataclasses import dataclass
 from functools import lru_cache
-from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
 from hdjoint import _core
+from hdjoint.io.outputs import printable
 
 
 class ParameterError(ValueError):
@@ -29,6 +29,22 @@ RENAMED = {
     "jsf_motor_counts": "motor_counts",
     "jsf_link_counts": "link_counts",
 }
+
+
+# A key shaped like a parameter's name is named in a message; any other key, or a value that is no
+# number, is described, never quoted: a parameter file may be a link to a file that is not one.
+_NAME_SHAPED = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,39}\Z")
+
+
+def _key(name) -> str:
+    return f"'{name}'" if isinstance(name, str) and _NAME_SHAPED.match(name) else "(a key not shaped like a name)"
+
+
+def _value(value) -> str:
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return repr(value)
+    return {str: "a string", bool: "true or false", list: "a list", dict: "an object", type(None): "null"}.get(
+        type(value), "not a number")
 
 
 @dataclass(frozen=True)
@@ -136,9 +152,9 @@ def check(params: dict, source: str = "parameter set") -> dict[str, float]:
     checked = {}
     for name, value in params.items():
         if name not in info:
-            raise ParameterError(f"{source}: unknown parameter '{name}'")
+            raise ParameterError(f"{source}: unknown parameter {_key(name)}")
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ParameterError(f"{source}: parameter '{name}' must be a number, not {value!r}")
+            raise ParameterError(f"{source}: parameter '{name}' must be a number, not {_value(value)}")
         try:
             value = float(value)
         except OverflowError:
@@ -163,19 +179,37 @@ def _no_duplicates(pairs):
     seen = {}
     for key, value in pairs:
         if key in seen:
-            raise ParameterError(f"'{key}' is given twice")
+            raise ParameterError(f"{_key(key)} is given twice")
         seen[key] = value
     return seen
 
 
+# The largest parameter file read, bytes: a parameter set with its statements is a few kilobytes.
+MAX_FILE_BYTES = 1 << 20
+
+
+def read_small_file(path, limit: int = MAX_FILE_BYTES) -> bytes | None:
+    """PATH's bytes, or None when it holds more than LIMIT (only LIMIT + 1 are ever read: a
+    device such as /dev/zero costs no memory). OSError when it cannot be read."""
+    with open(path, "rb") as f:
+        data = f.read(limit + 1)
+    return None if len(data) > limit else data
+
+
 def _read_json(path) -> dict:
+    shown = printable(path)
     try:
+        data = read_small_file(path)
+        if data is None:
+            raise ParameterError(f"{shown}: larger than {MAX_FILE_BYTES // 1024} kB; a parameter file is a small "
+                                 "JSON object of name: number (is this a parameter file?)")
         # utf-8-sig: a byte-order mark is tolerated, as in a recording.
-        text = Path(path).read_bytes().decode("utf-8-sig")
+        text = data.decode("utf-8-sig")
     except OSError as e:
-        raise ParameterError(f"{path}: cannot read the parameter file ({e.strerror})") from None
+        raise ParameterError(f"{shown}: cannot read the parameter file ({e.strerror})") from None
     except UnicodeDecodeError as e:
-        raise ParameterError(f"{path}: not UTF-8 text ({e.reason} at byte {e.start})") from None
+        raise ParameterError(f"{shown}: not UTF-8 text ({e.reason} at byte {e.start})") from None
+    path = shown
     try:
         data = json.loads(text, object_pairs_hook=_no_duplicates)
     except json.JSONDecodeError as e:
@@ -203,13 +237,13 @@ def check_tolerances(overrides, source: str = "parameter set") -> dict[str, floa
     checked = {}
     for name, value in overrides.items():
         if name not in info:
-            raise ParameterError(f"{source}: '{TOLERANCE_KEY}' names an unknown parameter '{name}'")
+            raise ParameterError(f"{source}: '{TOLERANCE_KEY}' names an unknown parameter {_key(name)}")
         if not info[name].calibrated():
             raise ParameterError(f"{source}: '{TOLERANCE_KEY}' names '{name}', which the diagnosis never calibrates")
         lo, hi = TOLERANCE_RANGE
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not lo <= value <= hi:  # NaN fails too
             raise ParameterError(f"{source}: tolerance of '{name}' must be a positive number from {lo:g} to {hi:g} "
-                                 f"(a fraction of the nominal value, 0.1 for +-10 %), not {value!r}")
+                                 f"(a fraction of the nominal value, 0.1 for +-10 %), not {_value(value)}")
         checked[name] = float(value)
     return checked
 
@@ -232,7 +266,7 @@ def check_accuracy(value, source: str = "parameter set") -> float | None:
     if value is None:
         return None
     if not _positive_number(value):
-        raise ParameterError(f"{source}: '{ACCURACY_KEY}' must be a positive number of N.m (RMS), not {value!r}")
+        raise ParameterError(f"{source}: '{ACCURACY_KEY}' must be a positive number of N.m (RMS), not {_value(value)}")
     return float(value)
 
 
@@ -242,11 +276,11 @@ def check_sensor_noise(stated, source: str = "parameter set") -> dict[str, float
         raise ParameterError(f"{source}: '{SENSOR_NOISE_KEY}' must be an object of column: RMS noise")
     for column, value in stated.items():
         if column not in SENSOR_NOISE_UNITS:
-            raise ParameterError(f"{source}: '{SENSOR_NOISE_KEY}' names '{column}'; it states "
+            raise ParameterError(f"{source}: '{SENSOR_NOISE_KEY}' names {_key(column)}; it states "
                                  f"{' and '.join(SENSOR_NOISE_UNITS)} (the encoders' noise is their counts)")
         if not _positive_number(value):
             raise ParameterError(f"{source}: noise of '{column}' must be a positive number of "
-                                 f"{SENSOR_NOISE_UNITS[column]} (RMS), not {value!r}")
+                                 f"{SENSOR_NOISE_UNITS[column]} (RMS), not {_value(value)}")
     return {column: float(value) for column, value in stated.items()}
 
 
@@ -336,13 +370,13 @@ def load(path: str | os.PathLike | None) -> dict[str, float]:
     if path is None:
         return params
     data = _read_json(path)
-    check_documentation(data, str(path))
+    check_documentation(data, printable(path))
     data.pop(ABOUT_KEY, None)
     data.pop(DOCUMENTATION_KEY, None)
-    check_tolerances(data.pop(TOLERANCE_KEY, {}), str(path))
-    check_accuracy(data.pop(ACCURACY_KEY, None), str(path))
-    check_sensor_noise(data.pop(SENSOR_NOISE_KEY, {}), str(path))
-    params.update(check(data, str(path)))
+    check_tolerances(data.pop(TOLERANCE_KEY, {}), printable(path))
+    check_accuracy(data.pop(ACCURACY_KEY, None), printable(path))
+    check_sensor_noise(data.pop(SENSOR_NOISE_KEY, {}), printable(path))
+    params.update(check(data, printable(path)))
     return params
 
 
@@ -358,9 +392,9 @@ def load_statements(path: str | os.PathLike | None) -> dict:
     diagnosis takes it: "tolerance" (relative, per parameter), "accuracy"
     (N.m, or None) and the sensors' "noise" ({} when none is stated)."""
     data = {} if path is None else _read_json(path)
-    return {"tolerance": check_tolerances(data.get(TOLERANCE_KEY, {}), str(path)),
-            "accuracy": check_accuracy(data.get(ACCURACY_KEY), str(path)),
-            "noise": check_sensor_noise(data.get(SENSOR_NOISE_KEY, {}), str(path))}
+    return {"tolerance": check_tolerances(data.get(TOLERANCE_KEY, {}), printable(path)),
+            "accuracy": check_accuracy(data.get(ACCURACY_KEY), printable(path)),
+            "noise": check_sensor_noise(data.get(SENSOR_NOISE_KEY, {}), printable(path))}
 
 
 def load_tolerances(path: str | os.PathLike | None) -> dict[str, float]:
@@ -369,24 +403,8 @@ def load_tolerances(path: str | os.PathLike | None) -> dict[str, float]:
 
 
 def _atomic_write(path: str | os.PathLike, text: str) -> None:
-    from hdjoint.io.outputs import (
-        check_replaceable,
-        replace_into,
-        temp_path,
-        write_error,
-    )
-    check_replaceable(path)  # never over a device node, a FIFO or a read-only file
-    tmp = temp_path(path)
-    try:
-        with open(tmp, "x", encoding="utf-8") as f:
-            f.write(text)
-        replace_into(tmp, path)  # an existing file keeps its mode; a new one as the umask says
-    except OSError as e:
-        Path(tmp).unlink(missing_ok=True)
-        raise write_error(path, e) from None
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    from hdjoint.io.outputs import write_whole
+    write_whole(path, text)  # never over a link, a device node, a FIFO or a read-only file
 
 
 def save(path: str | os.PathLike, params: dict[str, float], statements: dict | None = None) -> None:

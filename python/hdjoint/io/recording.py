@@ -6,13 +6,15 @@ sample, time strictly increasing.  Required columns: ``time``, ``i_m``,
 (in ``Recording.extra``) and otherwise ignored.
 
 A malformed file raises one ``RecordingError`` naming the file and, where it
-applies, the 1-based line (the header is line 1) and the column.
+applies, the 1-based line (the header is line 1) and the column; never the
+file's contents (a recording may be a link to a file that is not one, and
+the message reaches pages and tables). A line longer than MAX_LINE
+characters is refused as it is read: memory stays bounded whatever the file.
 """
 
 from __future__ import annotations
 
 import csv
-import itertools
 import math
 import os
 import warnings
@@ -21,13 +23,19 @@ from typing import Iterable, Iterator, Mapping, Sequence
 
 import numpy as np
 
-from hdjoint.io.outputs import check_replaceable, replace_into, sweep_debris, temp_path, write_error
+from hdjoint.io.outputs import check_replaceable, open_temp, printable, replace_into, sweep_debris, write_error
 
 REQUIRED_COLUMNS = ("time", "i_m", "theta_m", "theta_l")
 OPTIONAL_COLUMNS = ("tau_sensor",)
 # Columns the tools compute with: these must be numbers and finite.
 KNOWN_COLUMNS = REQUIRED_COLUMNS + OPTIONAL_COLUMNS
 MIN_ROWS = 2
+# The longest line read, in characters: a row of a recording is tens of characters, a header hundreds.
+MAX_LINE = 1 << 16
+# The largest magnitude a computed-with column may hold: the FMUs' input range. Beyond it (a 1e308), the
+# arithmetic would overflow far from its line; within it, a wild sample is screened (io/screening.py).
+MAX_MAGNITUDE = 1e300
+BLOCK_CHARS = 1 << 25  # the most text one block holds (32 M characters), however long its lines
 
 __all__ = [
     "REQUIRED_COLUMNS",
@@ -47,7 +55,7 @@ class RecordingError(ValueError):
 
     The message always starts with the file name, then the line and column
     when the problem has one, e.g.
-    ``data.csv: line 17, column theta_l: 'abc' is not a number``.
+    ``data.csv: line 17, column theta_l: not a number``.
     """
 
     def __init__(self, path, reason: str, line: int | None = None,
@@ -61,7 +69,7 @@ class RecordingError(ValueError):
             where.append(f"line {line}")
         if column is not None:
             where.append(f"column {column}")
-        prefix = f"{self.path}: " + (", ".join(where) + ": " if where else "")
+        prefix = f"{printable(self.path)}: " + (", ".join(where) + ": " if where else "")
         super().__init__(prefix + reason)
 
     def __reduce__(self):
@@ -169,6 +177,7 @@ class Recording:
 
 
 def _check_header(path: str, header: list[str]) -> list[str]:
+    """The column names; a message names only the contract's own (the others are the file's contents)."""
     names = [name.strip() for name in header]
     seen: dict[str, int] = {}
     for i, name in enumerate(names, start=1):
@@ -177,13 +186,16 @@ def _check_header(path: str, header: list[str]) -> list[str]:
         if name in seen:
             raise RecordingError(
                 path, f"duplicate column name (columns {seen[name]} and {i})",
-                line=1, column=name)
+                line=1, column=name if name in KNOWN_COLUMNS else None)
         seen[name] = i
     missing = [c for c in REQUIRED_COLUMNS if c not in seen]
     if missing:
+        known = [n for n in names if n in KNOWN_COLUMNS]
+        others = len(names) - len(known)
+        found = ", ".join(known + ([f"{others} other column{'s' if others > 1 else ''}"] if others else []))
         raise RecordingError(
             path, f"missing required column{'s' if len(missing) > 1 else ''} "
-                  f"{', '.join(missing)} (found: {', '.join(names)})", line=1)
+                  f"{', '.join(missing)} (found: {found}; is this a recording?)", line=1)
     return names
 
 
@@ -210,9 +222,11 @@ def _first_bad_cell(cells: Sequence[str]) -> tuple[int, str] | None:
         try:
             value = _number(cell)
         except ValueError:
-            return i, f"{cell!r} is not a number"
+            return i, "not a number" if cell.strip() else "empty, not a number"
         if not math.isfinite(value):
-            return i, f"{cell.strip()!r} is not a finite number"
+            return i, "not a finite number (nan or inf)"
+        if abs(value) > MAX_MAGNITUDE:
+            return i, f"too large a number (over {MAX_MAGNITUDE:g} in size) for a measurement"
     return None
 
 
@@ -225,7 +239,7 @@ def _parse_known_columns(path, names, columns, lines) -> dict[str, np.ndarray]:
         cells = columns[names.index(name)]
         try:
             arr = np.fromiter(map(_number, cells), dtype=float, count=len(cells))
-            ok = bool(np.isfinite(arr).all())
+            ok = bool((np.abs(arr) <= MAX_MAGNITUDE).all())  # NaN fails too
         except ValueError:
             ok = False
         if ok:
@@ -254,8 +268,7 @@ def _check_time(path, time, lines):
     if bad.size:
         k = int(bad[0]) + 1
         raise RecordingError(
-            path, f"time {float(time[k])!r} is not after {float(time[k - 1])!r} on line "
-                  f"{lines[k - 1]} (time must be strictly increasing)",
+            path, f"not after the time on line {lines[k - 1]} (time must be strictly increasing)",
             line=lines[k], column="time")
 
 
@@ -271,9 +284,19 @@ def _open(path: str):
         raise RecordingError(path, f"cannot read file: {exc.strerror or exc}") from None
 
 
-def _read_lines(path: str, f, count: int) -> list[str]:
+def _read_lines(path: str, f, count: int, first_line: int) -> list[str]:
+    """Up to COUNT lines from F, FIRST_LINE the first's number; a line over MAX_LINE characters is refused."""
+    lines, size = [], 0
     try:
-        return list(itertools.islice(f, count))
+        for line in iter(lambda: f.readline(MAX_LINE + 2), ""):
+            if len(line) > MAX_LINE and len(line.rstrip("\r\n")) > MAX_LINE:
+                raise RecordingError(path, f"longer than {MAX_LINE} characters; a recording's lines are far shorter "
+                                           "(is this a recording?)", line=first_line + len(lines))
+            lines.append(line)
+            size += len(line)
+            if len(lines) == count or size >= BLOCK_CHARS:  # a block of long lines ends early
+                break
+        return lines
     except UnicodeDecodeError as exc:
         raise RecordingError(path, f"not UTF-8 text ({exc.reason} at byte {exc.start} of a block)") from None
     except OSError as exc:
@@ -281,9 +304,9 @@ def _read_lines(path: str, f, count: int) -> list[str]:
 
 
 def _read_header(path: str, f) -> list[str]:
-    first = _read_lines(path, f, 1)
+    first = _read_lines(path, f, 1, 1)
     if not first or not first[0].strip():
-        rest = _read_lines(path, f, 1 << 16)
+        rest = _read_lines(path, f, 1 << 16, 2)
         if any(line.strip() for line in rest):
             # Keep the "header is line 1" promise honest when blank lines lead.
             raise RecordingError(path, "header row must be the first line",
@@ -315,7 +338,7 @@ def _chunk_fast(names, lines: list[str]) -> dict[str, np.ndarray] | None:
     if data.shape != (len(lines), len(names)):  # e.g. a blank line: the line numbers would shift
         return None
     columns = dict(zip(names, np.ascontiguousarray(data.T)))
-    if not all(np.isfinite(columns[name]).all() for name in KNOWN_COLUMNS if name in columns):
+    if not all((np.abs(columns[name]) <= MAX_MAGNITUDE).all() for name in KNOWN_COLUMNS if name in columns):
         return None
     if not (np.diff(columns["time"]) > 0).all():
         return None
@@ -364,7 +387,7 @@ def iter_recording(path, rows: int = CHUNK_ROWS) -> Iterator[Chunk]:
     with _open(path) as f:
         names = _read_header(path, f)
         next_line, last, total = 2, None, 0
-        while lines := _read_lines(path, f, rows):
+        while lines := _read_lines(path, f, rows, next_line):
             columns = _chunk_fast(names, lines)
             numbers = np.arange(next_line, next_line + len(lines))
             if columns is None:
@@ -453,21 +476,16 @@ class CsvWriter:
         self.path = os.fspath(path)
         self.names = list(names)
         sweep_debris(self.path)  # what a run killed outright (SIGKILL) left behind
-        self._tmp = temp_path(self.path)
         try:
-            # O_EXCL: never clobber a stranger's file; 0o666 lets the umask
-            # decide the final permissions, as for a normally created file.
-            fd = os.open(self._tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+            # O_EXCL and O_NOFOLLOW: never a stranger's file or a link; 0o666 lets
+            # the umask decide the final permissions, as for a normally created file.
+            self._file, self._tmp = open_temp(self.path)
         except OSError as exc:
             raise write_error(self.path, exc) from None
         try:  # from here the temporary file is ours to remove, even if a signal stops us before `with` is entered
-            self._file = open(fd, "w", newline="", encoding="utf-8")
             self._writer = csv.writer(self._file, lineterminator="\n")
             self._guard(self._writer.writerow, self.names)
         except BaseException:
-            if not hasattr(self, "_file"):
-                os.close(fd)
-                self._file = None
             self.discard()
             raise
 

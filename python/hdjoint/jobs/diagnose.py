@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from hdjoint.io.outputs import (OutputError, check_replaceable, created_directory, replace_into, sweep_debris,
-    temp_path, write_error)
+from hdjoint.io.outputs import (OutputError, check_replaceable, created_directory, printable, replace_into,
+    sweep_debris, temp_path, write_error)
 from hdjoint.jobs.inputs import UserError, check_output_directory, locked_output, read_params, read_recording
 
 
@@ -91,7 +91,7 @@ def screened_recordings(recs):
         except Degenerate as e:
             raise UserError(str(e)) from None
         if screening.outliers or screening.kept_as_recorded:
-            _progress(f"{rec.path}: {screening.summary()}")
+            _progress(f"{printable(rec.path)}: {screening.summary()}")
         cleaned.append(rec)
         found.append(screening)
     return cleaned, found

@@ -20,6 +20,7 @@ from hdjoint.estimation.smoother import SMOOTH_COLUMNS, SmoothedRows
 from hdjoint.jobs.inputs import UserError, check_output_file, locked_output, read_params
 from hdjoint.estimation.metrics import RunningErrorFigures
 from hdjoint.io.reading_jitter import ReadingJitter, reading_jitter
+from hdjoint.io.outputs import printable
 from hdjoint.io.screening import Degenerate, check_no_wrap, find_outliers
 from hdjoint.io.recording import CHUNK_ROWS, CsvWriter, Recording, RecordingError, iter_recording
 from hdjoint.io.timebase import (TIME_UNITS, TimeBaseError, check_step, describe, given_ts, irregular_steps,
@@ -105,7 +106,7 @@ class TimedBlocks:
                 before = int(chunk.lines[bad.index]) if bad.index >= 0 else previous[1]
                 text = describe(bad, before, int(chunk.lines[bad.index + 1]), self.step)
                 if bad.kind == "gap" and self.opts.split_gaps:
-                    print(f"warning: {self.opts.recording}: {text}: the estimator restarts after it",
+                    print(f"warning: {printable(self.opts.recording)}: {text}: the estimator restarts after it",
                           file=sys.stderr)
                     self.gaps.append(text)
                     cuts.append(bad.index + 1)
@@ -160,7 +161,8 @@ def _estimate_locked(opts: Options) -> Estimated:
     if blocks.wild:
         shown = ", ".join(f"line {line} {name} = {value:.4g}" for name, line, value in blocks.wild[:5])
         more = f" and {len(blocks.wild) - 5} more" if len(blocks.wild) > 5 else ""
-        print(f"warning: {opts.recording}: {len(blocks.wild)} wild sample{'s' if len(blocks.wild) > 1 else ''} "
+        print(f"warning: {printable(opts.recording)}: {len(blocks.wild)} "
+              f"wild sample{'s' if len(blocks.wild) > 1 else ''} "
               f"({shown}{more}): the estimates around them are unreliable (hdjoint diagnose leaves such samples "
               "out)", file=sys.stderr)
     if ts_from_recording and abs(blocks.ts - 1e-3) > 1e-9:

@@ -5,9 +5,10 @@ from __future__ import annotations
 
 import contextlib
 import os
+import shutil
 from pathlib import Path
 
-from hdjoint.io.outputs import OutputError, OutputLock, check_replaceable
+from hdjoint.io.outputs import OutputError, OutputLock, check_replaceable, created_directory, printable
 
 
 class UserError(Exception):
@@ -48,6 +49,7 @@ def _same_file(a: Path, b: Path) -> bool:
 def check_output_file(path, inputs=()) -> None:
     """Refuse, before any work, an output file that is one of INPUTS (by any
     path), a directory, or in a missing or unwritable directory."""
+    _not_empty(path, "-o")
     out = Path(path)
     for given in inputs:
         if given is not None and _same_file(out, Path(given)):
@@ -56,6 +58,12 @@ def check_output_file(path, inputs=()) -> None:
         raise UserError(f"{path}: is a directory; the output must name a file")
     _check_writable_directory(path, out.absolute().parent)
     _replaceable(out)
+
+
+def _not_empty(path, option: str) -> None:
+    """An empty output path would mean the current folder: refused."""
+    if not os.fspath(path).strip():
+        raise UserError(f"{option} {printable(repr(os.fspath(path)))}: an empty output path; name a file or folder")
 
 
 def _replaceable(path: Path) -> None:
@@ -82,15 +90,16 @@ def locked_output(path):
 def _check_writable_directory(path, directory: Path) -> None:
     if not directory.is_dir():
         what = "is not a directory" if directory.exists() else "does not exist"
-        raise UserError(f"{path}: the directory {directory} {what}")
+        raise UserError(f"{printable(path)}: the directory {printable(directory)} {what}")
     if not os.access(directory, os.W_OK | os.X_OK):
-        raise UserError(f"{path}: the directory {directory} is not writable")
+        raise UserError(f"{printable(path)}: the directory {printable(directory)} is not writable")
 
 
 def check_output_directory(out, names, inputs=()) -> None:
     """Refuse, before any work, an output directory that is a file, or whose
     NAMES (the files to be written) are directories or inputs; a missing one
     needs a writable existing ancestor (it is created once all is computed)."""
+    _not_empty(out, "--out")
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise UserError(f"{out}: exists and is not a directory")
@@ -106,3 +115,28 @@ def check_output_directory(out, names, inputs=()) -> None:
     while not ancestor.exists():
         ancestor = ancestor.parent
     _check_writable_directory(out, ancestor)
+
+
+@contextlib.contextmanager
+def written_folder(out, option: str = "--out"):
+    """A folder a command writes (fmus, demo, fleet generate), checked before
+    any work (not empty, not a file, in a writable place: else exit 2 naming
+    it) and locked for the run; should the run fail, a folder it created goes
+    with all it wrote (each file in a folder that was there is written whole
+    or not at all)."""
+    _not_empty(out, option)
+    path = Path(out)
+    if path.exists() and not path.is_dir():
+        raise UserError(f"{printable(out)}: exists and is not a directory")
+    ancestor = path.absolute()
+    while not ancestor.exists():
+        ancestor = ancestor.parent
+    _check_writable_directory(out, ancestor)
+    created = created_directory(path)
+    with locked_output(path):
+        try:
+            yield path
+        except BaseException:
+            if created:
+                shutil.rmtree(created[0], ignore_errors=True)
+            raise
