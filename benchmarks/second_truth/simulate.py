@@ -21,7 +21,7 @@ def run(joint, controller, duration: float, Ts: float, probes: dict | None = Non
     y, _ = joint.rest_state(controller.start_angle(), 0.0 if tau_ext is None else float(tau_ext[0]))
     atol = joint.atol()
     N = joint.p["N"]
-    out = {k: np.empty((len(v), joint.n)) for k, v in probes.items()}
+    out = {k: np.full((len(v), joint.n), np.nan) for k, v in probes.items()}
     for k, v in probes.items():
         out[k][v <= 0.0] = y
     states = np.empty((n, joint.n))
@@ -34,13 +34,20 @@ def run(joint, controller, duration: float, Ts: float, probes: dict | None = Non
         if k == n - 1:
             break
         te = 0.0 if tau_ext is None else float(tau_ext[k])
-        sol = solve_ivp(joint.rhs, (t, t + Ts), y, method=method, args=(u, te), max_step=Ts,
+        t1 = ticks[k + 1]  # not t + Ts: a probe on the next tick must fall in this period
+        sol = solve_ivp(joint.rhs, (t, t1), y, method=method, args=(u, te), max_step=Ts,
                         rtol=rtol, atol=atol, dense_output=bool(probes))
         if not sol.success:
             raise RuntimeError(f"integration failed at t={t}: {sol.message}")
         for name, times in probes.items():
-            lo, hi = np.searchsorted(times, [max(t, 0.0), t + Ts], side="right")
+            lo, hi = np.searchsorted(times, [max(t, 0.0), t1], side="right")
             if hi > lo:
                 out[name][lo:hi] = sol.sol(times[lo:hi]).T
         y = sol.y[:, -1].copy()
+    for name, v in out.items():
+        late = v[:, 0] != v[:, 0]
+        if late.any():  # only probes after the last tick may be left
+            if np.any(probes[name][late] <= ticks[-1]):
+                raise RuntimeError(f"probe {name} not filled")
+            v[late] = y
     return {"ticks": ticks, "states": states, "i_cmd": cmds, "probes": out}

@@ -137,3 +137,18 @@ def test_presliding_hysteresis_loop(cls):
     assert abs(F[k]) > 0.2 * p["Fc"]
     tc, Fc_, _ = _integrate_friction(Coulomb(None, omega_c=0.3), w, 2.0, n=4000)
     assert abs(Fc_[k]) < 0.05 * p["Fc"]
+
+
+def test_probes_on_the_ticks_read_the_tick_states():
+    """Every probe is answered, and a probe on a tick reads that tick's state (k*Ts vs t+Ts rounding)."""
+    j = joint()
+    Ts, D = 1e-3, 2.5
+    n = int(round(D / Ts)) + 1
+    t = np.arange(n) * Ts
+    r = 0.3 + 0.2 * np.sin(2 * np.pi * 0.5 * t)
+    nom = dict(j.p, omega_fc=1.0, motor_counts=4096.0)
+    out = run(j, PDController(nom, r, np.gradient(r, Ts), np.gradient(np.gradient(r, Ts), Ts), Ts), D, Ts,
+              probes={"tick": t, "late": t - 3.3e-4})
+    assert np.allclose(out["probes"]["tick"], out["states"], rtol=0, atol=1e-9)
+    assert np.all(np.isfinite(out["probes"]["late"]))
+    assert np.max(np.abs(np.diff(out["probes"]["late"][:, 0]))) < 1e-3
