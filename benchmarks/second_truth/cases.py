@@ -128,7 +128,8 @@ def main(argv=None) -> int:
     for s in seeds:
         records.append(make_case(s, out, duration=a.duration))
         print(f"case {s}: planted {[p['id'] for p in records[-1]['planted']]}", file=sys.stderr, flush=True)
-    (out / "truth.json").write_text(json.dumps({"seeds": a.seeds, "cases": records}, indent=1))
+        # rewritten after each case: a long run can be read (and diagnosed) while it goes on
+        (out / "truth.json").write_text(json.dumps({"seeds": a.seeds, "cases": records}, indent=1))
     return 0
 
 

@@ -152,3 +152,22 @@ def test_probes_on_the_ticks_read_the_tick_states():
     assert np.allclose(out["probes"]["tick"], out["states"], rtol=0, atol=1e-9)
     assert np.all(np.isfinite(out["probes"]["late"]))
     assert np.max(np.abs(np.diff(out["probes"]["late"][:, 0]))) < 1e-3
+
+
+def test_transmitted_torque_follows_the_contract_compliance():
+    """Without extra forms, tau_f = tan(Cf*Kf*(theta_m/N - theta_l - theta_err))/Cf with eq. (7) as the contract writes it."""
+    j = joint(harmonics=[("m", 3.0, 2e-5, 1e-5)])
+    p = j.p
+    rng = np.random.default_rng(5)
+    for _ in range(20):
+        y, _ = j.rest_state(0.0)
+        y[0], y[2] = rng.uniform(-2, 2), rng.uniform(-6e-4, 6e-4)
+        tl = y[0]
+        tm = p["N"] * (y[0] + y[2])
+        w, ww = p["omega_l"], p["omega_w"]
+        terr = (p["a0"] + p["al1"] * math.cos(w * tl) + p["bl1"] * math.sin(w * tl)
+                + p["aw1"] * math.cos(ww * tm) + p["bw1"] * math.sin(ww * tm)
+                + p["aw2"] * math.cos(2 * ww * tm) + p["bw2"] * math.sin(2 * ww * tm)
+                + 2e-5 * math.cos(3 * tm) + 1e-5 * math.sin(3 * tm))
+        x = tm / p["N"] - tl - terr
+        assert j.tau_f(0.0, y) == pytest.approx(math.tan(p["Cf"] * p["Kf"] * x) / p["Cf"], rel=1e-6, abs=1e-9)
