@@ -46,19 +46,21 @@ def constant_speed(t, rng):
 
 
 def chirp(t, rng):
-    """Log chirp 0.1 -> 2.5 Hz, amplitude limited to 6 rad/s^2, around a drawn offset."""
+    """Log chirp 0.1 -> 2.5 Hz, amplitude smoothly limited to 6 rad/s^2, around a drawn offset."""
     f0, f1 = 0.1, 2.5
     T = t[-1] if t[-1] > 0 else 1.0
     k = np.log(f1 / f0) / T
     f = f0 * np.exp(k * t)
     phase = 2 * np.pi * f0 * (np.exp(k * t) - 1) / k
-    amp = np.minimum(0.8, 6.0 / (2 * np.pi * f) ** 2) * _smoothstep(t / 0.5)
+    # a smooth min of 0.8 rad and 6 rad/s^2 / (2*pi*f)^2: a hard min's corner would put a spike
+    # into the acceleration feed-forward (and a current spike into the recording)
+    amp = _smoothstep(t / 0.5) / np.sqrt(0.8 ** -2 + ((2 * np.pi * f) ** 2 / 6.0) ** 2)
     return float(rng.uniform(-0.3, 0.3)) * _smoothstep(t / 0.5) + amp * np.sin(phase)
 
 
 def reference(name: str, duration: float, Ts: float, rng):
     t = np.arange(int(round(duration / Ts)) + 1) * Ts
     r = {"dwell_reversals": dwell_reversals, "constant_speed": constant_speed, "chirp": chirp}[name](t, rng)
-    rd = np.gradient(r, Ts)
-    rdd = np.gradient(rd, Ts)
+    rd = np.gradient(r, Ts, edge_order=2)
+    rdd = np.gradient(rd, Ts, edge_order=2)
     return r, rd, rdd

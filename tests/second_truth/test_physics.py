@@ -171,3 +171,12 @@ def test_transmitted_torque_follows_the_contract_compliance():
                 + 2e-5 * math.cos(3 * tm) + 1e-5 * math.sin(3 * tm))
         x = tm / p["N"] - tl - terr
         assert j.tau_f(0.0, y) == pytest.approx(math.tan(p["Cf"] * p["Kf"] * x) / p["Cf"], rel=1e-6, abs=1e-9)
+
+
+@pytest.mark.parametrize("name", ["dwell_reversals", "constant_speed", "chirp"])
+def test_references_are_smooth(name):
+    """No corner in a reference: its acceleration (the drive's feed-forward) has no spikes."""
+    from second_truth.excitations import reference
+    r, rd, rdd = reference(name, 20.0, 1e-3, np.random.default_rng(4))
+    assert np.max(np.abs(r)) < 1.3 and np.max(np.abs(rdd)) < 25.0
+    assert np.max(np.abs(np.diff(rdd))) < 0.5  # rad/s^2 per sample
