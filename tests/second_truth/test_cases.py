@@ -64,7 +64,7 @@ def test_dropped_samples_make_gaps(tmp_path):
 
 def test_delay_shifts_the_current(tmp_path):
     """Same joint and noise, the planted time_delay only: the current is the plain one shifted."""
-    kw = dict(forms={"timing": None, "dropouts": None}, excitation="chirp", duration=1.5)
+    kw = dict(forms={"timing": None, "dropouts": None}, excitation="chirp", duration=0.8)
     plain = cases.make_case(1013, tmp_path / "p", planted=[], **kw)
     late = cases.make_case(1013, tmp_path / "d", planted=["time_delay"], **kw)
     i0 = _rows(tmp_path / "p" / plain["csv"])[:, 1]
