@@ -27,13 +27,16 @@ sys.path.insert(0, str(HERE))
 import stamp  # noqa: E402
 
 DEFAULT_OUT = HERE.parent / "docs" / "results" / "diagnosis_second_truth.md"
+# the installed console script beside this interpreter (a pyenv shim can fail while pyenv rehashes)
+_BESIDE = Path(sys.executable).parent / "hdjoint"
+HDJOINT = str(_BESIDE) if _BESIDE.exists() else "hdjoint"
 
 
 def diagnose(case_dir: Path, rec: dict, timeout: float = 600.0) -> dict:
     out = case_dir / f"diag_{rec['seed']}"
     fj = out / "findings.json"
     if not fj.exists():
-        cmd = ["hdjoint", "diagnose", str(case_dir / rec["csv"]), "--params", str(case_dir / rec["params"]),
+        cmd = [HDJOINT, "diagnose", str(case_dir / rec["csv"]), "--params", str(case_dir / rec["params"]),
                "--out", str(out)]
         p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
         if p.returncode != 0:
