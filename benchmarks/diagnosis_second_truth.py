@@ -63,6 +63,11 @@ def score(rec: dict, d: dict) -> dict:
     fs = d.get("findings", [])
     row["verdict"] = d.get("verdict")
     row["findings"] = [f"{f.get('effect')}:{f.get('kind')}" for f in fs]
+    # the current's true lateness behind the encoders (sensor delay + lag + a planted delay) against a found i_delay
+    cs = next((f["params"] for f in rec["forms"] if f["role"] == "current_sensor"), {})
+    row["current_delay_truth"] = cs.get("delay", 0.0) + cs.get("tau_s", 0.0) + cs.get("extra_delay", 0.0)
+    row["i_delay_found"] = next(((f.get("parameters") or {}).get("i_delay") for f in fs
+                                 if f.get("effect") == "time_delay"), None)
     named = {f.get("effect") for f in fs} | {a.get("effect") if isinstance(a, dict) else a
                                               for f in fs for a in (f.get("alternatives") or [])}
     if rec["control"]:
@@ -112,8 +117,11 @@ def report(rows: list[dict], cmd: str, truth_commit: str) -> str:
     for (fam, form), rs in sorted(by.items()):
         L.append(f"| {fam} | {form} | {_frac([r for r in rs if r['control']], 'alarmed')} | "
                  f"{_frac([r for r in rs if r in eff], 'named_first')} |")
-    L += ["", "## Cases", "", "| seed | planted | excitation | sensor | verdict | findings (first first) | score |",
-          "|---|---|---|---|---|---|---|"]
+    L += ["", "## Cases", "",
+          "Current delay: the truth's current reading behind the encoders (sensor delay + lag + any planted "
+          "delay) and, after the arrow, the `i_delay` of a `time_delay` finding.", "",
+          "| seed | planted | excitation | sensor | verdict | findings (first first) | score | current delay (ms) |",
+          "|---|---|---|---|---|---|---|---|"]
     for r in rows:
         if "error" in r:
             L.append(f"| {r['seed']} | {', '.join(r['planted']) or 'control'} | {r['excitation']} | "
@@ -127,8 +135,10 @@ def report(rows: list[dict], cmd: str, truth_commit: str) -> str:
                  if r["kf_estimate"] is not None else "no Kf")
         else:
             s = "first" if r["named_first"] else ("named" if r["named_anywhere"] else "missed")
+        found = r.get("i_delay_found")
+        delay = f"{1e3 * r.get('current_delay_truth', 0.0):.3f}" + (f" -> {1e3 * found:.3f}" if isinstance(found, (int, float)) else "")
         L.append(f"| {r['seed']} | {', '.join(r['planted']) or 'control'} | {r['excitation']} | {r['with_sensor']} | "
-                 f"{r['verdict']} | {', '.join(r['findings']) or '-'} | {s} |")
+                 f"{r['verdict']} | {', '.join(r['findings']) or '-'} | {s} | {delay} |")
     return "\n".join(L) + "\n"
 
 

@@ -8,7 +8,8 @@ FAM = {"motor_friction": "lugre"}
 
 def _rec(planted, **kw):
     return {"seed": 1, "control": not planted, "planted": [{"id": p} for p in planted], "families": FAM,
-            "excitation": "chirp", "with_sensor": True, "truth_params": {"Kf": 17500.0}, **kw}
+            "excitation": "chirp", "with_sensor": True, "truth_params": {"Kf": 17500.0},
+            "forms": [{"role": "current_sensor", "params": {"delay": 1e-4, "tau_s": 2e-5}}], **kw}
 
 
 def test_control_alarmed_only_when_not_consistent():
@@ -47,3 +48,11 @@ def test_report_counts():
     text = bench.report(rows, "cmd", "abc")
     assert "| controls alarmed (verdict not `consistent`) | 1/2 |" in text
     assert "| motor_friction | lugre | 1/2 | - |" in text
+
+
+def test_delay_found_beside_the_truth():
+    d = {"verdict": "missing_physics", "findings": [{"effect": "time_delay", "kind": "added",
+                                                     "parameters": {"i_delay": 0.0004}}]}
+    r = bench.score(_rec([]), d)
+    assert r["current_delay_truth"] == 1.2e-4 and r["i_delay_found"] == 0.0004
+    assert "| 0.120 -> 0.400 |" in bench.report([r], "cmd", "abc")
