@@ -113,3 +113,36 @@ def test_seed_split_and_held_out_families():
     assert len(used) > 1  # the sealed seeds do draw the held-out forms
     planted = {e for s in cases.SEALED_SEEDS[:20] for e in cases.plan(s)["planted"]}
     assert planted == set(cases.EFFECT_ORDER)
+
+
+def test_cli_writes_cases_and_manifest(tmp_path):
+    assert cases.main(["--out", str(tmp_path), "--seeds", "tuning", "--limit", "2", "--duration", "0.3"]) == 0
+    m = json.loads((tmp_path / "truth.json").read_text())
+    assert m["seeds"] == "tuning" and [c["seed"] for c in m["cases"]] == [0, 1]
+    for c in m["cases"]:
+        assert (tmp_path / c["csv"]).exists() and (tmp_path / c["params"]).exists()
+        assert c["split"] == "tuning" and c["held_out_used"] == []
+    assert m["cases"][0]["control"] and m["cases"][1]["planted"][0]["id"] == cases.EFFECT_ORDER[0]
+
+
+def test_ideal_current_sensor_reads_the_current_at_the_tick():
+    """With no lag, delay, gain error or noise the recorded current is the joint's current at each tick."""
+    from second_truth import nominal, recording
+    from second_truth.controller import PDController
+    from second_truth.excitations import reference
+    from second_truth.forms.coulomb import Coulomb
+    from second_truth.forms.current_sensor import LSB, CurrentSensor
+    from second_truth.forms.tan_law import TanLaw
+    from second_truth.joint import Joint
+
+    truth, user = nominal.draw(np.random.default_rng(2))
+    j = Joint(truth, [TanLaw(), Coulomb(None, omega_c=0.3)])
+    Ts, D = 1e-3, 0.4
+    r, rd, rdd = reference("dwell_reversals", D, Ts, np.random.default_rng(1))
+    ideal = CurrentSensor(None, gain=1.0, offset=0.0, c3=0.0, tau_s=1e-9, delay=0.0, noise=0.0)
+    rec = recording.record(j, PDController(dict(user, mgl=truth["mgl"]), r, rd, rdd, Ts), D, Ts, [ideal],
+                           np.random.default_rng(0), {"motor_counts": 4096.0, "link_counts": 524288.0})
+    i_tick = rec["sim"]["states"][:, 4]
+    assert np.max(np.abs(rec["i_m"] - i_tick)) <= LSB / 2 + 1e-12
+    late = CurrentSensor(None, gain=1.0, offset=0.0, c3=0.0, tau_s=1e-9, delay=0.0, noise=0.0, extra_delay=2e-3)
+    assert np.allclose(late.probe_times(rec["ticks"])[::6], rec["ticks"] - 2e-3)
