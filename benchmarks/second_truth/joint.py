@@ -10,7 +10,10 @@ carries the transmitted torque's share tau_w = tau_f/N (solved by Newton).
 The torsion q = theta_m/N - theta_l is integrated as a state itself, so the
 small difference of two large angles is never formed (theta_m reaches
 hundreds of rad, the torsion is 1e-4 rad). The current loop is a first-order
-lag behind the drive's held command.
+lag behind the drive's held command. Approximations: the transmission forms
+(damping, hysteresis) see the torsion rate without the wave generator's
+share, add to the torque outside the Newton loop, and act only in contact
+(outside a backlash's dead zone).
 State: [theta_l, omega_l, q, omega_m, i, form states...].
 """
 from __future__ import annotations
