@@ -25,6 +25,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 import stamp  # noqa: E402
+from second_truth.forms import HELD_OUT  # noqa: E402
 
 DEFAULT_OUT = HERE.parent / "docs" / "results" / "diagnosis_second_truth.md"
 # the installed console script beside this interpreter (a pyenv shim can fail while pyenv rehashes)
@@ -115,7 +116,8 @@ def report(rows: list[dict], cmd: str, truth_commit: str) -> str:
         for fam, form in r["families"].items():
             by[(fam, str(form))].append(r)
     for (fam, form), rs in sorted(by.items()):
-        L.append(f"| {fam} | {form} | {_frac([r for r in rs if r['control']], 'alarmed')} | "
+        shown = f"{fam} (held out: no choice looked at it)" if fam in HELD_OUT else fam
+        L.append(f"| {shown} | {form} | {_frac([r for r in rs if r['control']], 'alarmed')} | "
                  f"{_frac([r for r in rs if r in eff], 'named_first')} |")
     L += ["", "## Cases", "",
           "Current delay: the truth's current reading behind the encoders (sensor delay + lag + any planted "

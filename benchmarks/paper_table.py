@@ -15,7 +15,7 @@ from results import ResultsPage
 
 from hdjoint.estimation.paper_table import reproduce
 from hdjoint.fmu import experiments
-from hdjoint.jobs.paper_calibration import sensorless_set
+from hdjoint.jobs.paper_joint_calibration import sensorless_set
 
 
 def main():

@@ -9,7 +9,7 @@ torque sensor's column: a bench recording to calibrate from, and a run in
 use with an external load the estimators do not know (payload steps on even
 seeds, contact pushes on odd ones). The run is estimated by `hdjoint
 estimate` with (a) the nominal set, (b) `--calibrate-from` the bench
-recording (jobs/calibrate.py), (c) the exact set: the truth's values of
+recording (jobs/sensorless_calibration.py), (c) the exact set: the truth's values of
 every parameter the model has. The error is tau_hat's RMS against the
 truth's transmitted torque, as a share of the run's torque span; with (b)
 and (c), the share of the run's samples whose true torque lies within +-2
@@ -36,7 +36,7 @@ from hdjoint.app import cli
 from hdjoint.diagnosis.effects.hysteresis import dahl_matching_bouc_wen
 from hdjoint.io import parameters
 from hdjoint.io.recording import write_recording
-from hdjoint.jobs.calibrate import placed_on
+from hdjoint.jobs.sensorless_calibration import placed_on
 from hdjoint.jobs.inputs import read_recording
 from hdjoint.jobs.estimate import as_written
 from hdjoint.diagnosis.rules import INTERVAL
@@ -294,7 +294,7 @@ def _scored(rows: list[dict], name: str) -> list[float]:
 
 
 def _against(rows: list[dict], rule: str) -> str:
-    """How the rule in jobs/calibrate.py compares with another rule (more than 10 % apart)."""
+    """How the rule in jobs/sensorless_calibration.py compares with another rule (more than 10 % apart)."""
     pairs = [(r["shares"]["calibrated"], r["shares"][rule]) for r in rows if r["shares"].get(rule) is not None]
     better = sum(a < b / NOMINAL_MARGIN for a, b in pairs)
     worse = sum(a > b * NOMINAL_MARGIN for a, b in pairs)
@@ -313,7 +313,7 @@ def _scale_holds(rows: list[dict]) -> str:
 
 
 def _scaled_holds(rows: list[dict]) -> str:
-    """How often the interval of a scaled value used (its estimate's and the scale's, as calibrate.py combines
+    """How often the interval of a scaled value used (its estimate's and the scale's, as jobs/sensorless_calibration.py combines
     them) holds the truth's value, against the estimate's interval alone, over every torque-carrying parameter."""
     combined = alone = count = 0
     for r in rows:
@@ -371,7 +371,7 @@ def write_table(rows: list[dict]) -> str:
              + " / ".join(f"{100 * np.median(_scored(rows, s)):.2f}" for s in COLUMNS) + " |",
              "| worst error: " + " / ".join(COLUMNS) + " (% of span) | "
              + " / ".join(f"{100 * max(_scored(rows, s), default=float('nan')):.2f}" for s in COLUMNS) + " |",
-             *(f"| calibrated (jobs/calibrate.py's rule) against {rule} | {_against(rows, rule)} |"
+             *(f"| calibrated (jobs/sensorless_calibration.py's rule) against {rule} | {_against(rows, rule)} |"
                for rule in OTHER_RULES),
              f"| Kt, set by the joint's torque scale: its {100 * INTERVAL:g} % interval holds the truth's value | "
              f"{_scale_holds(rows)} |",

@@ -9,7 +9,7 @@ from hdjoint.estimation.paper_table import reproduce
 from hdjoint.fmu import experiments
 from hdjoint.io import parameters
 from hdjoint.io.recording import read_recording
-from hdjoint.jobs.paper_calibration import sensorless_set
+from hdjoint.jobs.paper_joint_calibration import sensorless_set
 
 ROW = "hdjoint: tau_hat after a sensorless calibration"
 

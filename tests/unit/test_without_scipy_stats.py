@@ -14,7 +14,7 @@ from hdjoint.diagnosis.effects.needs import spearman
 
 
 def test_diagnose_imports_neither_scipy_stats_nor_matplotlib():
-    code = ("import sys; import hdjoint.app.cli, hdjoint.jobs.diagnose, hdjoint.jobs.calibrate, "
+    code = ("import sys; import hdjoint.app.cli, hdjoint.jobs.diagnose, hdjoint.jobs.sensorless_calibration, "
             "hdjoint.diagnosis.pipeline, hdjoint.diagnosis.output.report; print(sorted(m for m in ('scipy.stats', 'matplotlib') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"

@@ -166,7 +166,7 @@ def estimate(recording: RecordingLike, params: ParametersLike = None, *, engine:
                        params=staged.params(params), engine=engine, smooth=smooth, time_unit=time_unit,
                        split_gaps=split_gaps, allow_jitter=allow_jitter, current_sign=current_sign)
         if calibrate_from is not None:
-            from hdjoint.jobs.calibrate import estimate_calibrated
+            from hdjoint.jobs.sensorless_calibration import estimate_calibrated
             estimated, _ = estimate_calibrated(opts, [staged.recording(r) for r in _recordings(calibrate_from)])
         else:
             estimated = estimate_to_file(opts)
@@ -213,7 +213,7 @@ def calibrate(recordings: RecordingLike | Sequence[RecordingLike], params: Param
     >>> type(cal.params).__name__, cal.scale > 0
     ('Parameters', True)
     """
-    from hdjoint.jobs.calibrate import calibrate_from
+    from hdjoint.jobs.sensorless_calibration import calibrate_from
     from hdjoint.jobs.estimate import as_written
     with _Staged() as staged:
         params_path = staged.params(params)

@@ -73,7 +73,7 @@ def cmd_estimate(args) -> int:
                    smooth=args.smooth, time_unit=args.time_unit, split_gaps=args.split_gaps,
                    allow_jitter=args.allow_jitter, current_sign=args.current_sign)
     if args.calibrate_from:
-        from hdjoint.jobs.calibrate import estimate_calibrated, sidecars
+        from hdjoint.jobs.sensorless_calibration import estimate_calibrated, sidecars
         estimated, calibrated = estimate_calibrated(opts, args.calibrate_from)
         print(f"calibrated set: {sidecars(args.output)[0]} (its calibration: {sidecars(args.output)[1]})")
         print(calibrated.describe_scale())

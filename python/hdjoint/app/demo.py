@@ -18,7 +18,7 @@ from hdjoint.fmu.shipped import export_fmus
 from hdjoint.io import figures as plots
 from hdjoint.io import parameters
 from hdjoint.io.recording import write_csv, write_recording
-from hdjoint.jobs.paper_calibration import sensorless_set
+from hdjoint.jobs.paper_joint_calibration import sensorless_set
 from hdjoint.io.outputs import printable, write_whole
 
 

@@ -68,7 +68,7 @@ def reproduce(rec: Recording, params: dict[str, float] | None = None, reference=
     """Compare the estimators on a recording against `reference` (default: the
     recording's true torque column `tau_joint`, else `tau_sensor`); with
     `calibrated` (a set calibrated from other recordings without a torque
-    sensor, e.g. jobs.paper_calibration), tau_hat with it too."""
+    sensor, e.g. jobs.paper_joint_calibration), tau_hat with it too."""
     params = dict(params or parameters.defaults())
     if reference is None:
         reference = rec.extra.get("tau_joint", rec.tau_sensor)

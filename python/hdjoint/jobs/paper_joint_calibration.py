@@ -12,7 +12,7 @@ from pathlib import Path
 from hdjoint.fmu import experiments
 from hdjoint.io import parameters
 from hdjoint.io.recording import Recording, write_recording
-from hdjoint.jobs.calibrate import calibrate_from, placed_on
+from hdjoint.jobs.sensorless_calibration import calibrate_from, placed_on
 
 # The bench recording: an excitation the paper's sinusoid is not, with other sensor noise.
 BENCH_EXPERIMENT = "multisine"
