@@ -78,6 +78,6 @@ def test_the_check_sees_a_missing_option():
 
 
 def test_simulates_shortest_duration_is_the_apis():
-    from hdjoint.api.functions import MIN_DURATION
+    from hdjoint.api.functions import SHORTEST_SIMULATION
     from hdjoint.app import cli
-    assert cli.MIN_DURATION == MIN_DURATION
+    assert cli.SHORTEST_SIMULATION == SHORTEST_SIMULATION

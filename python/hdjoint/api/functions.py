@@ -20,13 +20,13 @@ from hdjoint.io.recording import Recording
 from hdjoint.jobs.inputs import UserError
 
 __all__ = ["read_recording", "simulate", "estimate", "diagnose", "calibrate", "export_fmus", "UserError",
-           "check_experiment", "MIN_DURATION"]
+           "check_experiment", "SHORTEST_SIMULATION"]
 
 PathLike = Union[str, os.PathLike]
 RecordingLike = Union[Recording, PathLike]
 ParametersLike = Union[Parameters, Mapping[str, float], PathLike, None]
 # The shortest recording simulate writes: ten samples at 1 kHz (the readers need two rows, a fit more).
-MIN_DURATION = 0.01
+SHORTEST_SIMULATION = 0.01
 
 
 def read_recording(path: PathLike, time_unit: str | None = None, current_sign: float = 1.0) -> Recording:
@@ -46,14 +46,14 @@ def read_recording(path: PathLike, time_unit: str | None = None, current_sign: f
 
 
 def check_experiment(experiment: str, duration: float | None) -> None:
-    """Refuse an unknown built-in experiment, or a duration outside MIN_DURATION..its length (UserError)."""
+    """Refuse an unknown built-in experiment, or a duration outside SHORTEST_SIMULATION..its length (UserError)."""
     from hdjoint.fmu import experiments
     if experiment not in experiments.EXPERIMENTS:
         raise UserError(f"--experiment {experiment}: unknown; known: {', '.join(experiments.EXPERIMENTS)}")
     if duration is not None:
         longest = experiments.EXPERIMENTS[experiment].duration
-        if not math.isfinite(duration) or not MIN_DURATION <= duration <= longest:
-            raise UserError(f"--duration {duration:g}: must be from {MIN_DURATION:g} s to the experiment's "
+        if not math.isfinite(duration) or not SHORTEST_SIMULATION <= duration <= longest:
+            raise UserError(f"--duration {duration:g}: must be from {SHORTEST_SIMULATION:g} s to the experiment's "
                             f"length, {longest:g} s ({experiment}); leave it out for the whole experiment")
 
 

@@ -19,8 +19,8 @@ from hdjoint.io.timebase import TIME_UNITS
 DESCRIPTION = ("Torque sensing for harmonic-drive robot joints: FMUs, simulation, torque estimation, diagnosis, "
                "fleets. Exit code 0 on success, 2 for bad input or an output that must not be written, 1 for a "
                "failure while running, 130/143 when stopped by SIGINT/SIGTERM (docs/robustness.md).")
-# The shortest recording simulate writes (hdjoint.api.functions.MIN_DURATION), for the help text.
-MIN_DURATION = 0.01
+# The shortest recording simulate writes (hdjoint.api.functions.SHORTEST_SIMULATION), for the help text.
+SHORTEST_SIMULATION = 0.01
 
 
 def cmd_fmus(args) -> int:
@@ -177,7 +177,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--joint", help="parameter set (JSON) of the simulated joint "
                                    "(default: the nominal set with realistic deviations)")
     p.add_argument("--duration", type=float,
-                   help=f"seconds, from {MIN_DURATION:g} to the experiment's length (default: the whole experiment)")
+                   help=f"seconds, from {SHORTEST_SIMULATION:g} to the experiment's length "
+                        "(default: the whole experiment)")
     p.add_argument("--seed", type=whole_number(0), default=1, help="seed of the sensor noise (an integer >= 0; default 1)")
     p.add_argument("-o", "--output", required=True, help="recording to write (CSV)")
     p.set_defaults(run=cmd_simulate)

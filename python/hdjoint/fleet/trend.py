@@ -20,7 +20,7 @@ from datetime import datetime
 import numpy as np
 from scipy import stats
 
-from hdjoint.diagnosis import EFFECTS
+from hdjoint.diagnosis import EFFECTS, INTERVAL_Z
 
 ALPHA = 0.05
 # A drift matters when the fitted change over the observed period reaches the
@@ -28,7 +28,7 @@ ALPHA = 0.05
 # its first value where none is stated: a significant but tiny trend is not
 # a joint to service.
 RELEVANT_CHANGE = 0.10
-Z95 = stats.norm.ppf(0.975)
+
 # The kinematic error's amplitude (RMS over a revolution of its harmonic
 # terms), at the motor angle's orders (wave generator: eq. (7) aw/bw and the
 # extra ke_m slots) and at the link angle's (al1/bl1, ke_l slots) apart: the
@@ -119,14 +119,14 @@ def quantity(row: dict, name: str) -> tuple[float, float, float]:
         if not math.isfinite(c):
             continue
         coeffs.append(c)
-        ses.append((_get(row, f"param.{slot}.hi") - _get(row, f"param.{slot}.lo")) / (2 * Z95))
+        ses.append((_get(row, f"param.{slot}.hi") - _get(row, f"param.{slot}.lo")) / (2 * INTERVAL_Z))
     if not coeffs:
         return math.nan, math.nan, math.nan
     c, se = np.array(coeffs), np.array(ses)
     amplitude = float(np.sqrt(np.sum(c * c) / 2))
     if amplitude == 0 or not np.all(np.isfinite(se)):
         return amplitude, math.nan, math.nan
-    half = Z95 * float(np.sqrt(np.sum((c / (2 * amplitude)) ** 2 * se ** 2)))
+    half = INTERVAL_Z * float(np.sqrt(np.sum((c / (2 * amplitude)) ** 2 * se ** 2)))
     return amplitude, amplitude - half, amplitude + half
 
 
@@ -135,7 +135,7 @@ def slope_test(days, values, lo=None, hi=None) -> tuple[float, float, float] | N
     x, y = np.asarray(days, float), np.asarray(values, float)
     if len(y) < 3 or np.ptp(x) == 0:
         return None
-    se = None if lo is None else (np.asarray(hi, float) - np.asarray(lo, float)) / (2 * Z95)
+    se = None if lo is None else (np.asarray(hi, float) - np.asarray(lo, float)) / (2 * INTERVAL_Z)
     w = 1.0 / se ** 2 if se is not None and np.all(np.isfinite(se)) and np.all(se > 0) else np.ones_like(y)
     xm, ym = np.sum(w * x) / np.sum(w), np.sum(w * y) / np.sum(w)
     sxx = np.sum(w * (x - xm) ** 2)
