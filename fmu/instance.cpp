@@ -1,6 +1,7 @@
 #include "instance.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -53,6 +54,13 @@ std::string format_value(double v) {
     char buf[40];
     std::snprintf(buf, sizeof buf, "%.17g", v);
     return buf;
+}
+
+std::string instance_name_problem(const char* name) {
+    if (!name || !*name) return "instanceName must not be empty";
+    for (const char* c = name; *c; ++c)
+        if (!std::isspace(static_cast<unsigned char>(*c))) return "";
+    return "instanceName must contain a character that is not whitespace";
 }
 
 Instance::Instance(const StateMachine& m, std::string instance_name, Logger log_to, bool debug)
@@ -127,6 +135,11 @@ Code Instance::set_debug_logging(const char* function, bool on, std::size_t n, c
 
 Code Instance::setup_experiment(const char* function, double start, bool stop_defined, double stop) {
     if (!std::isfinite(start)) return error(std::string(function) + ": startTime = " + format_value(start) + " is not finite");
+    // A stop time must be a time: an infinite one could not be saved in an
+    // FMU state and restored (state_problem refuses it), so it is refused here.
+    if (stop_defined && !std::isfinite(stop))
+        return error(std::string(function) + ": stopTime = " + format_value(stop) +
+                     " is not finite (leave the stop time undefined for an open-ended run)");
     if (stop_defined && !(stop >= start))
         return error(std::string(function) + ": stopTime = " + format_value(stop) + " is before startTime = " +
                      format_value(start));
@@ -207,9 +220,10 @@ Code Instance::no_such_variables(const char* function, unsigned states, std::siz
 
 Code Instance::do_step(const char* function, double t, double h) {
     const std::string fn = function;
-    if (!std::isfinite(t) || !std::isfinite(h) || h < 0.0)
+    // The step size must be > 0 (FMI 2.0.4 4.2.2, FMI 3.0 4.2.1): 0 and -0 are no step.
+    if (!std::isfinite(t) || !std::isfinite(h) || !(h > 0.0))
         return error(fn + ": communication point " + format_value(t) + " with step size " + format_value(h) +
-                     " is not a forward step");
+                     " is not a forward step (the step size must be > 0)");
     // Masters accumulate communication points in floating point; accept
     // round-off (and re-synchronise to the master's time) but not a jump.
     // Relative to the time only: a long step must not widen it.

@@ -72,6 +72,9 @@ struct SavedState {
 
 std::string format_value(double v);
 
+// Why an instance name is refused (null, empty or only whitespace), or "".
+std::string instance_name_problem(const char* name);
+
 class Instance {
 public:
     using Logger = std::function<void(Code, const char* category, const std::string& message)>;
