@@ -101,6 +101,11 @@ Code Instance::transition(const char* function, unsigned from, unsigned to) {
     return kOk;
 }
 
+Code Instance::with_function(const char* function, Result r) {
+    if (r.status != Status::Ok) r.message = std::string(function) + ": " + r.message;
+    return to_code(r);
+}
+
 Code Instance::to_code(const Result& r) {
     switch (r.status) {
         case Status::Ok: return kOk;
@@ -272,7 +277,7 @@ Code Instance::set_states(const char* function, const double x[], std::size_t n)
         if (!std::isfinite(x[i]))
             return error(std::string(function) + ": state " + std::to_string(i) + " = " + format_value(x[i]) +
                          " is not finite");
-    return guarded(function, [&] { return to_code(model->set_states(x)); });
+    return guarded(function, [&] { return with_function(function, model->set_states(x)); });
 }
 
 Code Instance::get_vector(const char* function, Vector which, double out[], std::size_t n) {
@@ -291,7 +296,7 @@ Code Instance::get_vector(const char* function, Vector which, double out[], std:
             case Vector::EventIndicators: r = model->event_indicators(out); break;
             case Vector::Nominals: break;
         }
-        return to_code(r);
+        return with_function(function, r);
     });
 }
 

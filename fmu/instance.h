@@ -102,6 +102,8 @@ public:
     // A call that only moves the state machine.
     Code transition(const char* function, unsigned from, unsigned to);
     Code to_code(const Result& r);
+    // The same, the message naming the FMI function.
+    Code with_function(const char* function, Result r);
 
     // Run `body`, turning any exception into an error naming `function`.
     template <class Body>

@@ -145,3 +145,32 @@ def test_state_events_at_the_backlash_edges_match_a_fine_step_reference(paper_cu
     assert len(events) >= 3, "the teeth never separated: the test shows nothing"
     assert len(events) == len(crossings), (events, crossings)
     assert np.max(np.abs(events - crossings)) <= fine_step / 10, (events, crossings)
+
+
+# fmpy's CVode right-hand side is a ctypes callback: the FMU's refusal is raised there, reported as
+# unraisable, and raised again by the next call outside it.
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_model_exchange_refuses_what_co_simulation_refuses(fmi):
+    """i_m = 1e30 drives the flexspline beyond its asymptote: Co-Simulation fails the step (singular
+    torsion). Model Exchange, through fmpy's CVode, fails too with the FMU's logged message (it held the
+    torque at +-1e12 N.m there and ran on): a state outside the joint's physical range is refused."""
+    path = str(fmu_path(JOINT, fmi))
+    inputs = np.array([(0.0, 1e30, 0.0), (0.01, 1e30, 0.0)], dtype=[("time", float), ("i_m", float),
+                                                                    ("tau_ext", float)])
+    messages: list[str] = []
+    if fmi == 2:
+        def logger(env, instance, status, category, message):
+            messages.append(message.decode())
+    else:
+        def logger(env, status, category, message):
+            messages.append(message.decode())
+    with pytest.raises(Exception):
+        simulate_fmu(path, stop_time=0.01, input=inputs, output=["tau_joint"])
+    with pytest.raises(Exception):
+        simulate_fmu(path, fmi_type="ModelExchange", stop_time=0.01, input=inputs, output=["tau_joint"],
+                     logger=logger)
+    refusals = [m for m in messages if "outside the joint's physical range" in m]
+    assert refusals, messages
+    assert refusals[0].startswith(("fmi2SetContinuousStates", "fmi3SetContinuousStates", "fmi2GetDerivatives",
+                                   "fmi3GetContinuousStateDerivatives")), refusals[0]
