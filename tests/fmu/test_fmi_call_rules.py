@@ -8,36 +8,14 @@ from __future__ import annotations
 import ctypes
 import math
 
-import fmpy
 import pytest
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi3 import FMU3Slave
 
-from hdjoint.fmu.shipped import FMU_NAMES, fmu_path
+from hdjoint.fmu.shipped import FMU_NAMES
 
-from conftest import Slave
+from conftest import Slave, Twin
 
 ERROR = 3
-
-
-class Twin:
-    """An FMI 3.0 Co-Simulation instance (fmpy's FMU3Slave) with its log messages recorded."""
-
-    def __init__(self, name, tmp_path, instance_name="twin"):
-        unzipdir = fmpy.extract(str(fmu_path(name, 3)), str(tmp_path / f"{name}_3"))
-        self.md = fmpy.read_model_description(unzipdir)
-        self.messages: list[str] = []
-        self.slave = FMU3Slave(guid=self.md.guid, unzipDirectory=unzipdir,
-                               modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=instance_name)
-        self.slave.instantiate(logMessage=self._log)
-
-    def _log(self, env, status, category, message):
-        self.messages.append(message.decode())
-
-    def refused(self, call, *args) -> str:
-        with pytest.raises(FMICallException):
-            call(*args)
-        return self.messages[-1]
 
 
 @pytest.fixture
@@ -96,8 +74,7 @@ def test_an_instance_name_with_a_visible_character_is_accepted(name, twins, make
 @pytest.mark.parametrize("h", [0.0, -0.0])
 def test_a_step_of_size_zero_is_refused(name, h, twins, make_slave):
     t = twins(name)
-    t.slave.enterInitializationMode(startTime=0.0)
-    t.slave.exitInitializationMode()
+    t.start()
     message = t.refused(t.slave.doStep, 0.0, h)
     assert "fmi3DoStep" in message and "must be > 0" in message, message
     s = make_slave(name)
@@ -145,8 +122,7 @@ def test_every_state_the_fmu_saves_can_be_restored(name, twins):
 @pytest.mark.parametrize("name", ["JointTorqueEstimator", "JointController"])
 def test_an_enormous_step_is_refused_naming_its_count_plainly(name, twins):
     t = twins(name)
-    t.slave.enterInitializationMode(startTime=0.0)
-    t.slave.exitInitializationMode()
+    t.start()
     message = t.refused(t.slave.doStep, 0.0, 1e300)
     assert "would run 1e+303 samples" in message, message
     assert "-9223372036854775808" not in message
