@@ -88,7 +88,10 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
         has_accepted_ = true;
         since_accepted_ = 0;
         const EstimatorStatus s = sample(in, message, reading, age);
-        if (s != EstimatorStatus::ReadingGated) return s;
+        if (s != EstimatorStatus::ReadingGated) {
+            gated_run_ = 0;
+            return s;
+        }
         // A torsion no torque explains (sample): not a reading to hold on to.
         accepted_ = before;
         has_accepted_ = had;
@@ -101,11 +104,15 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
         if (!recoverable(s)) return s;
     }
     ++gated_;
-    if (message) {
+    // Said once for a run of them: the samples that follow at once are counted (ReadingGated), not said again.
+    const bool first = ++gated_run_ == 1;
+    if (message) message->clear();
+    if (message && first) {
         std::ostringstream s;
         s.precision(6);
         s << "sample " << k << ": a reading no sensor could produce (" << why
-          << "); treated as missing: both filters predicted over it, tau_ukf_std and tau_hat_std grow";
+          << "); treated as missing, as is any that follows at once (counted, not said again): both filters "
+             "predicted over it, tau_ukf_std and tau_hat_std grow";
         *message = s.str();
     }
     return EstimatorStatus::ReadingGated;

@@ -163,6 +163,7 @@ private:
     long since_accepted_ = 0;
     long gated_ = 0;
     long singular_run_ = 0;  // samples in a row whose torsion no torque explained
+    long gated_run_ = 0;     // readings in a row gated (the first is said, the others counted)
     SampleClock clock_;
 };
 
@@ -202,6 +203,7 @@ bool TorqueEstimator::fields(Archive& a) {
            a("gate_i_m", accepted_.i_m) && a("gate_theta_m", accepted_.theta_m) &&
            a("gate_theta_l", accepted_.theta_l) && a("gate_samples_since", since_accepted_) &&
            a("readings_gated", gated_) && a("singular_run", singular_run_) &&
+           a("gated_run", gated_run_) &&
            output_fields(a, estimator_signals(), out_) &&
            a.part("compliance_model", compliance_) && a.part("joint_state_filter", joint_) &&
            a("samples", samples_) && clock_.fields(a);

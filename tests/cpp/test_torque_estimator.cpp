@@ -214,9 +214,15 @@ TEST(TorqueEstimator, SingularTorsionIsReported) {
         std::string msg;
         for (long k = 0; k < limit; ++k) {
             ASSERT_EQ(est.step(in, &msg), EstimatorStatus::ReadingGated) << k;
-            EXPECT_NE(msg.find("singular torsion"), std::string::npos) << msg;
+            // Said once, at the first of the run; the others are counted.
+            if (k == 0) {
+                EXPECT_NE(msg.find("singular torsion"), std::string::npos) << msg;
+            } else {
+                EXPECT_EQ(msg, "") << k;
+            }
             EXPECT_TRUE(std::isfinite(est.outputs().tau_ukf));
         }
+        EXPECT_EQ(est.readings_gated(), limit);
         EXPECT_EQ(est.step(in, &msg), EstimatorStatus::SingularTorsion);
         EXPECT_NE(msg.find("check N, a0"), std::string::npos) << msg;
         EXPECT_NE(msg.find("since sample 1"), std::string::npos) << msg;
