@@ -174,3 +174,45 @@ def test_model_exchange_refuses_what_co_simulation_refuses(fmi):
     assert refusals, messages
     assert refusals[0].startswith(("fmi2SetContinuousStates", "fmi3SetContinuousStates", "fmi2GetDerivatives",
                                    "fmi3GetContinuousStateDerivatives")), refusals[0]
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_a_state_beyond_the_asymptote_is_refused_where_it_is_set(fmi, tmp_path):
+    """fmi2/fmi3SetContinuousStates refuse a state the joint cannot be in (its torsion beyond the atan law's
+    asymptote) with a message naming the call, and leave the instance in the error state."""
+    import ctypes
+
+    import fmpy
+    from fmpy.fmi1 import FMICallException
+    from fmpy.simulation import instantiate_fmu
+    unzipdir = fmpy.extract(str(fmu_path(JOINT, fmi)), str(tmp_path / "me"))
+    md = read_model_description(unzipdir)
+    messages: list[str] = []
+    if fmi == 2:
+        def logger(env, instance, status, category, message):
+            messages.append(message.decode())
+    else:
+        def logger(env, status, category, message):
+            messages.append(message.decode())
+    fmu = instantiate_fmu(unzipdir, md, "ModelExchange", logger=logger)
+    try:
+        if fmi == 2:
+            fmu.setupExperiment(startTime=0.0)
+        fmu.enterInitializationMode()
+        fmu.exitInitializationMode()
+        fmu.newDiscreteStates() if fmi == 2 else fmu.updateDiscreteStates()
+        fmu.enterContinuousTimeMode()
+        x = (ctypes.c_double * 7)()
+        fmu.getContinuousStates(x, 7)
+        p = parameters.defaults()
+        x[0] += p["N"] * np.pi / (p["Cf"] * p["Kf"])  # twice the asymptote's torsion, on the motor side
+        with pytest.raises(FMICallException):
+            fmu.setContinuousStates(x, 7)
+        function = f"fmi{fmi}SetContinuousStates"
+        assert messages and messages[-1].startswith(function), messages
+        assert "outside the joint's physical range" in messages[-1], messages[-1]
+        dx = (ctypes.c_double * 7)()
+        with pytest.raises(FMICallException):  # in the error state now
+            fmu.getDerivatives(dx, 7) if fmi == 2 else fmu.getContinuousStateDerivatives(dx, 7)
+    finally:
+        fmu.freeInstance()
