@@ -59,8 +59,10 @@ std::string TorqueEstimator::wild(const EstimatorInputs& in) const {
         const char* speed_name;
         double now, before, speed, counts;
     };
-    for (const Channel& c : {Channel{"theta_m", "omega_m_max", in.theta_m, accepted_.theta_m, p_.omega_m_max, p_.motor_counts},
-                             Channel{"theta_l", "omega_m_max/N", in.theta_l, accepted_.theta_l, p_.omega_m_max / p_.N, p_.link_counts}}) {
+    const Channel channels[] = {
+        {"theta_m", "omega_m_max", in.theta_m, accepted_.theta_m, p_.omega_m_max, p_.motor_counts},
+        {"theta_l", "omega_m_max/N", in.theta_l, accepted_.theta_l, p_.omega_m_max / p_.N, p_.link_counts}};
+    for (const Channel& c : channels) {
         const double bound = c.speed * time + (c.counts > 0.0 ? kJumpCounts * kTwoPi / c.counts : 0.0);
         const double moved = std::fabs(c.now - c.before);
         if (!(moved <= bound)) {

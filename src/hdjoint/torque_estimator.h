@@ -140,7 +140,8 @@ private:
     EstimatorStatus predict_held(const EstimatorInputs& in, const ComplianceSample& c, std::string* message);
     // Outputs that show the compliance model only (before the filters start).
     void show_compliance(double tau, double dtheta_f);
-    static constexpr long kStateVersion = 10;  // 6: samples_held; 7: the torque error e; 8: the filter's hysteresis; 9: the current sensor's gain; 10: the gate
+    // 6: samples_held; 7: the torque error e; 8: the filter's hysteresis; 9: the current sensor's gain; 10: the gate
+    static constexpr long kStateVersion = 10;
 
     Parameters p_;
     PaperSystemModel system_;

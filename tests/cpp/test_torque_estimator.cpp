@@ -150,7 +150,8 @@ TEST(TorqueEstimator, WildReadingsAreGatedAndBothFiltersRecoverWithinATenthOfASe
                           Case{"theta_m = 1e30", 300, 300, &EstimatorInputs::theta_m, 1e30, false},
                           Case{"theta_m + 1000 counts", 300, 310, &EstimatorInputs::theta_m, 1000.0 * count_m, true},
                           Case{"theta_l + 1000 counts", 300, 300, &EstimatorInputs::theta_l, 1000.0 * count_l, true},
-                          Case{"theta_l - 1000 counts", 300, 320, &EstimatorInputs::theta_l, -1000.0 * count_l, true}}) {
+                          Case{"theta_l - 1000 counts", 300, 320, &EstimatorInputs::theta_l, -1000.0 * count_l,
+                               true}}) {
         std::vector<EstimatorStatus> statuses;
         const auto got = run_edited(p, inputs, [&](int k, EstimatorInputs* in) {
             if (k >= c.first && k <= c.last) in->*(c.field) = c.add ? in->*(c.field) + c.value : c.value;
