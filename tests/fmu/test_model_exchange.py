@@ -147,6 +147,13 @@ def test_state_events_at_the_backlash_edges_match_a_fine_step_reference(paper_cu
     assert np.max(np.abs(events - crossings)) <= fine_step / 10, (events, crossings)
 
 
+def _recording_logger(fmi, messages):
+    """A logger for fmpy (FMI 2.0's or 3.0's signature) that appends each message to MESSAGES."""
+    if fmi == 2:
+        return lambda env, instance, status, category, message: messages.append(message.decode())
+    return lambda env, status, category, message: messages.append(message.decode())
+
+
 # fmpy's CVode right-hand side is a ctypes callback: the FMU's refusal is raised there, reported as
 # unraisable, and raised again by the next call outside it.
 @pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
@@ -159,12 +166,7 @@ def test_model_exchange_refuses_what_co_simulation_refuses(fmi):
     inputs = np.array([(0.0, 1e30, 0.0), (0.01, 1e30, 0.0)], dtype=[("time", float), ("i_m", float),
                                                                     ("tau_ext", float)])
     messages: list[str] = []
-    if fmi == 2:
-        def logger(env, instance, status, category, message):
-            messages.append(message.decode())
-    else:
-        def logger(env, status, category, message):
-            messages.append(message.decode())
+    logger = _recording_logger(fmi, messages)
     with pytest.raises(Exception):
         simulate_fmu(path, stop_time=0.01, input=inputs, output=["tau_joint"])
     with pytest.raises(Exception):
@@ -188,12 +190,7 @@ def test_a_state_beyond_the_asymptote_is_refused_where_it_is_set(fmi, tmp_path):
     unzipdir = fmpy.extract(str(fmu_path(JOINT, fmi)), str(tmp_path / "me"))
     md = read_model_description(unzipdir)
     messages: list[str] = []
-    if fmi == 2:
-        def logger(env, instance, status, category, message):
-            messages.append(message.decode())
-    else:
-        def logger(env, status, category, message):
-            messages.append(message.decode())
+    logger = _recording_logger(fmi, messages)
     fmu = instantiate_fmu(unzipdir, md, "ModelExchange", logger=logger)
     try:
         if fmi == 2:
