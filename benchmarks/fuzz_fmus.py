@@ -6,6 +6,9 @@ record, with the reproducers, to docs/results/fuzz_<FMU>.json. One process
 per FMU may run in parallel (--fmu NAME); the last one's report has them all.
 
 Run: python benchmarks/fuzz_fmus.py [--sequences N] [--timeout CPU_SECONDS] [--fmu NAME ...]
+
+--wild N instead feeds both estimators N wild-reading scenarios on each engine
+(batch path, FMI 2.0, FMI 3.0; tests/fuzz/wild_readings.py) and prints the findings.
 """
 from __future__ import annotations
 
@@ -90,7 +93,14 @@ def main(argv=None) -> int:
     ap.add_argument("--fmu", nargs="+", default=list(FMU_NAMES), choices=FMU_NAMES)
     ap.add_argument("--report-only", action="store_true", help="only rewrite fuzz.md from the saved records")
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "results")
+    ap.add_argument("--wild", type=int, metavar="N", help="run N wild-reading scenarios per engine instead")
     args = ap.parse_args(argv)
+    if args.wild:
+        from wild_readings import campaign as wild_campaign
+        outcomes = wild_campaign(range(args.wild))
+        found = [f"{o.engine}: {o.scenario.describe()}: {f}" for o in outcomes for f in o.findings]
+        print("\n".join(found) or f"{len(outcomes)} wild-reading runs, no finding")
+        return 1 if found else 0
     args.out.mkdir(parents=True, exist_ok=True)
     if not args.report_only:
         with tempfile.TemporaryDirectory() as work:

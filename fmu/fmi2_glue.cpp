@@ -123,7 +123,8 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         return nullptr;
     };
     try {
-        if (name.empty()) return refuse("fmi2Instantiate: instanceName must not be empty");
+        if (const std::string problem = hdjoint::fmu::instance_name_problem(instanceName); !problem.empty())
+            return refuse("fmi2Instantiate: " + problem);
         if (fmuType != fmi2CoSimulation && !(fmuType == fmi2ModelExchange && info().model_exchange()))
             return refuse("fmi2Instantiate: " + info().model_identifier + " supports Co-Simulation only");
         const std::string expected = hdjoint::fmu::guid(info());

@@ -119,7 +119,8 @@ fmi3Instance instantiate(const char* function, fmi3String instanceName, fmi3Stri
         return nullptr;
     };
     try {
-        if (!instanceName || !*instanceName) return refuse("instanceName must not be empty");
+        if (const std::string problem = hdjoint::fmu::instance_name_problem(instanceName); !problem.empty())
+            return refuse(problem);
         if (!refusal.empty()) return refuse(refusal);
         const std::string expected = hdjoint::fmu::guid(info());
         if (!instantiationToken || expected != instantiationToken)
@@ -411,19 +412,20 @@ HDJ_FMI3_VECTOR(fmi3GetContinuousStates, States, kCanGetVectors)
 HDJ_FMI3_VECTOR(fmi3GetNominalsOfContinuousStates, Nominals, kCanGetVectors | kInstantiated)
 #undef HDJ_FMI3_VECTOR
 
+// Model Exchange functions (FMI 3.0, 3.2.1): a Co-Simulation instance refuses them.
 fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance c, size_t* n) {
-    Instance* in = as_instance(c);
+    Instance* in = in_state(c, "fmi3GetNumberOfEventIndicators", kAny, kME);
     if (!in) return fmi3Error;
     if (!n) return status(in->error("fmi3GetNumberOfEventIndicators: null argument"));
-    *n = is_model_exchange(in) ? info().event_indicators : 0;
+    *n = info().event_indicators;
     return fmi3OK;
 }
 
 fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance c, size_t* n) {
-    Instance* in = as_instance(c);
+    Instance* in = in_state(c, "fmi3GetNumberOfContinuousStates", kAny, kME);
     if (!in) return fmi3Error;
     if (!n) return status(in->error("fmi3GetNumberOfContinuousStates: null argument"));
-    *n = is_model_exchange(in) ? info().continuous_states : 0;
+    *n = info().continuous_states;
     return fmi3OK;
 }
 

@@ -5,6 +5,8 @@
 // Model Exchange hands a solver the same right-hand side
 // (JointPlant::derivative) on the states of HDJ_PLANT_STATES.
 #include <cmath>
+#include <cstdio>
+#include <optional>
 #include <string>
 
 #include "hdjoint/joint_plant.h"
@@ -51,7 +53,7 @@ public:
             return core_->full_state()(vr - kFirstStateReference);
         if (core_ && vr >= kFirstDerivativeReference && vr < kFirstDerivativeReference + kStateCount) {
             PlantFullState dx;
-            return core_->derivative(core_->full_state(), core_->time(), in_, &dx, nullptr, true)
+            return core_->derivative(core_->full_state(), core_->time(), in_, &dx, nullptr)
                        ? dx(vr - kFirstDerivativeReference) : std::nan("");
         }
         if (core_ && vr >= kFirstIndicatorReference && vr < kFirstIndicatorReference + kIndicatorCount)
@@ -70,16 +72,20 @@ public:
         for (unsigned i = 0; i < kStateCount; ++i) x[i] = s(i);
         return Result::ok();
     }
+    // A state outside the joint's physical range (JointPlant::physical) is
+    // refused as Co-Simulation refuses the input that would lead there.
     Result set_states(const double* x) override {
-        core_->set_full_state(Eigen::Map<const PlantFullState>(x));
-        out_ = core_->outputs(true);  // the torque the right-hand side uses
+        const PlantFullState s = Eigen::Map<const PlantFullState>(x);
+        if (auto problem = outside(s)) return Result::error(*problem);
+        core_->set_full_state(s);
+        out_ = core_->outputs();
         return Result::ok();
     }
     Result derivatives(double* dx) const override {
         PlantFullState d;
-        if (!core_->derivative(core_->full_state(), core_->time(), in_, &d, nullptr, true))
-            return Result::error("the state is outside the model's domain (singular torsion or non-finite "
-                                 "derivative) at theta_m = " + std::to_string(core_->state()(0)) + " rad");
+        if (auto problem = outside(core_->full_state())) return Result::error(*problem);
+        if (!core_->derivative(core_->full_state(), core_->time(), in_, &d, nullptr))
+            return Result::error("the derivative is not finite at theta_m = " + format(core_->state()(0)) + " rad");
         for (unsigned i = 0; i < kStateCount; ++i) dx[i] = d(i);
         return Result::ok();
     }
@@ -93,6 +99,22 @@ public:
     }
 
 private:
+    static std::string format(double v) {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%.9g", v);
+        return buf;
+    }
+    // Why the state is outside the joint's physical range, or nothing.
+    std::optional<std::string> outside(const PlantFullState& s) const {
+        double elastic = 0.0;
+        if (core_->physical(s, &elastic)) return std::nullopt;
+        if (!s.allFinite()) return std::string("a state is not finite");
+        return "the state is outside the joint's physical range: its elastic torsion " + format(elastic) +
+               " rad (theta_m = " + format(s(0)) + " rad, theta_l = " + format(s(2)) +
+               " rad) is beyond the flexspline's asymptote, where no torque explains it (singular torsion, as "
+               "Co-Simulation reports for the same input)";
+    }
+
     Result start() override {
         std::string message;
         return core_->initialize(in_.tau_ext, &message) ? Result::ok() : Result::error(message);

@@ -1,6 +1,7 @@
 #include "instance.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -55,6 +56,13 @@ std::string format_value(double v) {
     return buf;
 }
 
+std::string instance_name_problem(const char* name) {
+    if (!name || !*name) return "instanceName must not be empty";
+    for (const char* c = name; *c; ++c)
+        if (!std::isspace(static_cast<unsigned char>(*c))) return "";
+    return "instanceName must contain a character that is not whitespace";
+}
+
 Instance::Instance(const StateMachine& m, std::string instance_name, Logger log_to, bool debug)
     : machine(m), name(std::move(instance_name)), logger(std::move(log_to)), debug_logging(debug),
       state(m.instantiated), model(info().create()) {}
@@ -93,6 +101,11 @@ Code Instance::transition(const char* function, unsigned from, unsigned to) {
     return kOk;
 }
 
+Code Instance::with_function(const char* function, Result r) {
+    if (r.status != Status::Ok) r.message = std::string(function) + ": " + r.message;
+    return to_code(r);
+}
+
 Code Instance::to_code(const Result& r) {
     switch (r.status) {
         case Status::Ok: return kOk;
@@ -127,6 +140,11 @@ Code Instance::set_debug_logging(const char* function, bool on, std::size_t n, c
 
 Code Instance::setup_experiment(const char* function, double start, bool stop_defined, double stop) {
     if (!std::isfinite(start)) return error(std::string(function) + ": startTime = " + format_value(start) + " is not finite");
+    // A stop time must be a time: an infinite one could not be saved in an
+    // FMU state and restored (state_problem refuses it), so it is refused here.
+    if (stop_defined && !std::isfinite(stop))
+        return error(std::string(function) + ": stopTime = " + format_value(stop) +
+                     " is not finite (leave the stop time undefined for an open-ended run)");
     if (stop_defined && !(stop >= start))
         return error(std::string(function) + ": stopTime = " + format_value(stop) + " is before startTime = " +
                      format_value(start));
@@ -207,9 +225,10 @@ Code Instance::no_such_variables(const char* function, unsigned states, std::siz
 
 Code Instance::do_step(const char* function, double t, double h) {
     const std::string fn = function;
-    if (!std::isfinite(t) || !std::isfinite(h) || h < 0.0)
+    // The step size must be > 0 (FMI 2.0.4 4.2.2, FMI 3.0 4.2.1): 0 and -0 are no step.
+    if (!std::isfinite(t) || !std::isfinite(h) || !(h > 0.0))
         return error(fn + ": communication point " + format_value(t) + " with step size " + format_value(h) +
-                     " is not a forward step");
+                     " is not a forward step (the step size must be > 0)");
     // Masters accumulate communication points in floating point; accept
     // round-off (and re-synchronise to the master's time) but not a jump.
     // Relative to the time only: a long step must not widen it.
@@ -258,7 +277,7 @@ Code Instance::set_states(const char* function, const double x[], std::size_t n)
         if (!std::isfinite(x[i]))
             return error(std::string(function) + ": state " + std::to_string(i) + " = " + format_value(x[i]) +
                          " is not finite");
-    return guarded(function, [&] { return to_code(model->set_states(x)); });
+    return guarded(function, [&] { return with_function(function, model->set_states(x)); });
 }
 
 Code Instance::get_vector(const char* function, Vector which, double out[], std::size_t n) {
@@ -277,7 +296,7 @@ Code Instance::get_vector(const char* function, Vector which, double out[], std:
             case Vector::EventIndicators: r = model->event_indicators(out); break;
             case Vector::Nominals: break;
         }
-        return to_code(r);
+        return with_function(function, r);
     });
 }
 

@@ -72,6 +72,9 @@ struct SavedState {
 
 std::string format_value(double v);
 
+// Why an instance name is refused (null, empty or only whitespace), or "".
+std::string instance_name_problem(const char* name);
+
 class Instance {
 public:
     using Logger = std::function<void(Code, const char* category, const std::string& message)>;
@@ -99,6 +102,8 @@ public:
     // A call that only moves the state machine.
     Code transition(const char* function, unsigned from, unsigned to);
     Code to_code(const Result& r);
+    // The same, the message naming the FMI function.
+    Code with_function(const char* function, Result r);
 
     // Run `body`, turning any exception into an error naming `function`.
     template <class Body>

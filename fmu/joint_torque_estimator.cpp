@@ -22,7 +22,8 @@ private:
     Result step(double t, double h) override {
         std::string message;
         const EstimatorStatus s = core_->advance_to(t + h, t, in_, &message);
-        if (s == EstimatorStatus::Ok) return Result::ok();
+        // A run of gated readings is said once, at its first (the others are counted by the core).
+        if (s == EstimatorStatus::Ok || (s == EstimatorStatus::ReadingGated && message.empty())) return Result::ok();
         return recoverable(s) ? Result::warning(message) : Result::error(message);
     }
 };

@@ -175,6 +175,37 @@ class Slave:
             self.slave.freeInstance()
 
 
+class Twin:
+    """An FMI 3.0 Co-Simulation instance of a twin (fmpy's FMU3Slave) with its log messages recorded."""
+
+    def __init__(self, name, tmp_path, instance_name: str = "twin", **instantiate):
+        from fmpy.fmi3 import FMU3Slave
+        self.unzipdir = fmpy.extract(str(fmu_path(name, 3)), str(tmp_path / f"{name}_3"))
+        self.md = fmpy.read_model_description(self.unzipdir)
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        self.messages: list[str] = []
+        self.slave = FMU3Slave(guid=self.md.guid, unzipDirectory=self.unzipdir,
+                               modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=instance_name)
+        self.slave.instantiate(logMessage=self._log, **instantiate)
+
+    def _log(self, env, status, category, message):
+        self.messages.append(message.decode())
+
+    def refused(self, call, *args) -> str:
+        """The message of CALL(*ARGS), which must fail."""
+        with pytest.raises(Exception):
+            call(*args)
+        return self.messages[-1]
+
+    def start(self, stop=None):
+        self.slave.enterInitializationMode(startTime=0.0, stopTime=stop)
+        self.slave.exitInitializationMode()
+
+    def outputs(self):
+        names = [v.name for v in self.md.modelVariables if v.causality == "output"]
+        return np.array(self.slave.getFloat64([self.vr[n] for n in names]))
+
+
 @pytest.fixture
 def make_slave(unzipped):
     """Factory: make_slave(model_identifier, instance_name=...) -> Slave, freed at teardown."""

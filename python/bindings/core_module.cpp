@@ -516,6 +516,10 @@ NB_MODULE(_core, m) {
     m.attr("STATUS_SAMPLE_REJECTED") = static_cast<int>(EstimatorStatus::SampleRejected);
     // ... and for a sample without a new reading (a gap: its step held the inputs), predicted over.
     m.attr("STATUS_READINGS_HELD") = static_cast<int>(EstimatorStatus::ReadingsHeld);
+    // ... and for a reading no sensor could produce (a wild value), treated as missing and predicted over.
+    m.attr("STATUS_READING_GATED") = static_cast<int>(EstimatorStatus::ReadingGated);
+    // The gate's current bound, as a multiple of i_peak.
+    m.attr("WILD_CURRENT_MULTIPLE") = kWildCurrentMultiple;
     // The columns of EstimatorStream's records (one joint-state filter sample, flat).
     m.attr("RECORD_VALUES") = kRecordValues;
     m.def("fmu_signals", &fmu_signals,

@@ -78,19 +78,10 @@ bool JointPlant::initialize(double tau_ext, std::string* message) {
 
 bool JointPlant::joint_torque(const PlantState& x, double* tau) const { return torque(x, z_, tau); }
 
-// The elastic torque of the chain; beyond the torsion asymptote none, or,
-// when `saturate`, the transmission's largest torque (see derivative()).
-bool JointPlant::elastic_torque(double elastic, double* tau_f, bool saturate) const {
-    if (transmitted_torque(elastic, p_, tau_f)) return true;
-    if (!saturate || !std::isfinite(elastic)) return false;
-    *tau_f = std::copysign(kSaturatedTorque, elastic);
-    return true;
-}
-
-bool JointPlant::torque(const PlantState& x, const Vector<3>& z, double* tau, bool saturate) const {
+bool JointPlant::torque(const PlantState& x, const Vector<3>& z, double* tau) const {
     const double elastic = total_torsion(x(kThetaM), x(kThetaL), p_) - kinematic_error(x(kThetaM), x(kThetaL), p_);
     double tau_f = 0.0;
-    if (!elastic_torque(elastic, &tau_f, saturate)) return false;
+    if (!transmitted_torque(elastic, p_, &tau_f)) return false;  // beyond the torsion asymptote: none
     // Damping of the deformation only (elastic_torsion_rate).
     if (p_.Df != 0.0) *tau = tau_f + p_.Df * elastic_torsion_rate(x(kThetaM), x(kOmegaM), x(kThetaL), x(kOmegaL), p_);
     else *tau = tau_f;
@@ -117,6 +108,13 @@ bool JointPlant::within_bounds(const Vector<3>& z, double h) const {
     return true;
 }
 
+bool JointPlant::physical(const PlantFullState& x, double* elastic) const {
+    if (elastic)
+        *elastic = total_torsion(x(kThetaM), x(kThetaL), p_) - kinematic_error(x(kThetaM), x(kThetaL), p_);
+    double tau = 0.0;
+    return x.allFinite() && torque(x.head<4>(), x.tail<3>(), &tau);
+}
+
 PlantFullState JointPlant::full_state() const {
     PlantFullState x;
     x << x_, z_;
@@ -124,19 +122,18 @@ PlantFullState JointPlant::full_state() const {
 }
 
 bool JointPlant::derivative(const PlantFullState& x, double t, const PlantInputs& in, PlantFullState* dx,
-                            PlantJacobian* J, bool saturate) const {
-    return model<kPlantStates>(x, t, in, dx, J, saturate);
+                            PlantJacobian* J) const {
+    return model<kPlantStates>(x, t, in, dx, J);
 }
 
 template <int S>
-bool JointPlant::model(const Vector<S>& x, double t, const PlantInputs& in, Vector<S>* dx, Matrix<S>* J,
-                       bool saturate) const {
+bool JointPlant::model(const Vector<S>& x, double t, const PlantInputs& in, Vector<S>* dx, Matrix<S>* J) const {
     static_assert(S == 4 || S == kPlantStates, "the plant has 4 mechanical and 3 effect states");
     constexpr bool kFull = S == kPlantStates;
     const double theta_m = x(kThetaM), omega_m = x(kOmegaM), theta_l = x(kThetaL), omega_l = x(kOmegaL);
     const double elastic = total_torsion(theta_m, theta_l, p_) - kinematic_error(theta_m, theta_l, p_);
     double tau_f = 0.0;
-    if (!elastic_torque(elastic, &tau_f, saturate)) return false;
+    if (!transmitted_torque(elastic, p_, &tau_f)) return false;
     const double scale = plant_friction_scale(t, p_);
     const bool dahl = kFull && p_.hys_H > 0.0, bouc_wen = kFull && p_.bw_A > 0.0;
     const bool lugre = kFull && p_.lugre_sigma0 > 0.0;
@@ -316,14 +313,14 @@ bool JointPlant::substep(double h, const PlantInputs& in, int depth, std::string
     return substep(0.5 * h, in, depth + 1, message) && substep(0.5 * h, in, depth + 1, message);
 }
 
-PlantOutputs JointPlant::outputs(bool saturate) const {
+PlantOutputs JointPlant::outputs() const {
     PlantOutputs o;
     o.theta_m = quantise(x_(kThetaM), p_.motor_counts);
     o.theta_l = quantise(x_(kThetaL), p_.link_counts);
     o.omega_m = x_(kOmegaM);
     o.omega_link = x_(kOmegaL);
     double tau = 0.0;
-    o.tau_joint = torque(x_, z_, &tau, saturate) ? tau : std::nan("");
+    o.tau_joint = torque(x_, z_, &tau) ? tau : std::nan("");
     return o;
 }
 

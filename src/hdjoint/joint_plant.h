@@ -82,8 +82,7 @@ public:
     // or h needs more than kMaxSubstepsPerAdvance substeps.
     bool advance(double h, const PlantInputs& in, std::string* message = nullptr);
 
-    // `saturate`: with the transmitted torque held as derivative(..., true) holds it.
-    PlantOutputs outputs(bool saturate = false) const;
+    PlantOutputs outputs() const;
     const PlantState& state() const { return x_; }
     PlantFullState full_state() const;
     double time() const { return t_; }  // since initialize(); drives the friction drift and warm-up
@@ -115,6 +114,11 @@ public:
         z_ = x.tail<3>();
     }
     void set_time(double t) { t_ = t; }
+    // Whether a state is one the joint can be in: finite, its elastic torsion
+    // inside the atan law's asymptote (a torque explains it). Co-Simulation's
+    // advance fails outside it (singular torsion); Model Exchange refuses such
+    // a state. `elastic`: the state's elastic torsion, rad.
+    bool physical(const PlantFullState& x, double* elastic = nullptr) const;
     // The state events (plant_signals.def, HDJ_PLANT_EVENT_INDICATORS): the
     // backlash's two contact edges, each a constant 1 without backlash.
     static constexpr int kEventIndicators = 2;
@@ -122,26 +126,18 @@ public:
 
     // State derivative at time t (since initialize) and its Jacobian by the
     // state (analytic; public so tests can check it against differences).
-    // `saturate` (Model Exchange): beyond the torsion asymptote, where the
-    // integrator's own substeps fail and are retried in halves, the
-    // transmitted torque is held at +-kSaturatedTorque instead, so that a
-    // solver's trial point there gets a finite, enormous restoring torque and
-    // its error test rejects the step (a solver through fmpy cannot be told
-    // to retry a failed right-hand side).
+    // False beyond the torsion asymptote (no torque) or where it is not
+    // finite: Model Exchange refuses such a state (physical()).
     bool derivative(const PlantFullState& x, double t, const PlantInputs& in, PlantFullState* dx,
-                    PlantJacobian* J, bool saturate = false) const;
-    // The transmission's largest torque (transmitted_torque's bracket), N.m.
-    static constexpr double kSaturatedTorque = 1e12;
+                    PlantJacobian* J) const;
 
 private:
     // The model on S = 4 (mechanical) or S = 7 (all) states.
     template <int S>
-    bool model(const Vector<S>& x, double t, const PlantInputs& in, Vector<S>* dx, Matrix<S>* J,
-               bool saturate = false) const;
+    bool model(const Vector<S>& x, double t, const PlantInputs& in, Vector<S>* dx, Matrix<S>* J) const;
     template <int S>
     bool ros2_step(double h, const PlantInputs& in, std::string* message);
-    bool torque(const PlantState& x, const Vector<3>& z, double* tau, bool saturate = false) const;
-    bool elastic_torque(double elastic, double* tau_f, bool saturate) const;
+    bool torque(const PlantState& x, const Vector<3>& z, double* tau) const;
     bool within_bounds(const Vector<3>& z, double h) const;
     bool extra_states() const { return p_.hys_H > 0.0 || p_.bw_A > 0.0 || p_.lugre_sigma0 > 0.0; }
     bool substep(double h, const PlantInputs& in, int depth, std::string* message);

@@ -7,6 +7,7 @@
 // A step is bounded: one that would run more than kMaxSamplesPerStep samples
 // is refused whole (nothing runs), never looped through for hours.
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "state_fields.h"
@@ -29,9 +30,8 @@ public:
         const double due = (end - tolerance - start_) / Ts_ - static_cast<double>(next_);
         if (!(due <= static_cast<double>(kMaxSamplesPerStep))) {
             if (message) {
-                *message = "a step to t = " + std::to_string(end) + " s would run " +
-                           (std::isfinite(due) ? std::to_string(static_cast<long long>(std::ceil(due))) : "unbounded") +
-                           " samples of Ts = " + std::to_string(Ts_) + " s; at most " +
+                *message = "a step to t = " + format_count(end) + " s would run " + format_count(std::ceil(due)) +
+                           " samples of Ts = " + format_count(Ts_) + " s; at most " +
                            std::to_string(kMaxSamplesPerStep) + " are allowed per step: split the step";
             }
             return false;
@@ -42,6 +42,15 @@ public:
             if (!sample(t)) return false;
         }
         return true;
+    }
+
+    // A count or time as a person reads it: "3e+305", "1000", "unbounded"
+    // (never through an integer type a huge count would overflow).
+    static std::string format_count(double v) {
+        if (!std::isfinite(v)) return "unbounded";
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%.6g", v);
+        return buf;
     }
 
     double start_time() const { return start_; }

@@ -17,6 +17,8 @@ double consistent(double std, double nis, double Ts, double time, double* mean) 
     return std * std::sqrt(std::max(1.0, *mean));
 }
 
+constexpr double kTwoPi = 6.283185307179586;
+
 std::string describe_input(const EstimatorInputs& in) {
     std::ostringstream s;
     s.precision(17);
@@ -39,7 +41,86 @@ TorqueEstimator::TorqueEstimator(const Parameters& p, double start_time)
                                     Vector<2>::Zero(), P0);
 }
 
+std::string TorqueEstimator::wild(const EstimatorInputs& in) const {
+    if (!std::isfinite(in.i_m) || !std::isfinite(in.theta_m) || !std::isfinite(in.theta_l)) return describe_input(in);
+    const double i_max = kWildCurrentMultiple * p_.i_peak;
+    if (std::fabs(in.i_m) > i_max) {
+        std::ostringstream s;
+        s.precision(6);
+        s << "input i_m = " << in.i_m << " A is beyond " << kWildCurrentMultiple << " x i_peak = " << i_max
+          << " A, more than the current sensor reads";
+        return s.str();
+    }
+    if (!has_accepted_) return "";
+    // The time since the last accepted reading, and a late reading's age.
+    const double time = p_.Ts * (static_cast<double>(since_accepted_) + kMaxReadingAge);
+    struct Channel {
+        const char* name;
+        const char* speed_name;
+        double now, before, speed, counts;
+    };
+    const Channel channels[] = {
+        {"theta_m", "omega_m_max", in.theta_m, accepted_.theta_m, p_.omega_m_max, p_.motor_counts},
+        {"theta_l", "omega_m_max/N", in.theta_l, accepted_.theta_l, p_.omega_m_max / p_.N, p_.link_counts}};
+    for (const Channel& c : channels) {
+        const double bound = c.speed * time + (c.counts > 0.0 ? kJumpCounts * kTwoPi / c.counts : 0.0);
+        const double moved = std::fabs(c.now - c.before);
+        if (!(moved <= bound)) {
+            std::ostringstream s;
+            s.precision(6);
+            s << "input " << c.name << " moved " << moved << " rad in " << since_accepted_
+              << " sample(s) since the last accepted reading, more than the joint can (at most " << bound
+              << " rad: " << c.speed_name << " = " << c.speed << " rad/s, plus "
+              << kJumpCounts << " counts)";
+            return s.str();
+        }
+    }
+    return "";
+}
+
 EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* message, bool reading, double age) {
+    if (has_accepted_) ++since_accepted_;
+    const long k = samples_;
+    std::string why = wild(in);
+    if (why.empty()) {
+        const EstimatorInputs before = accepted_;
+        const bool had = has_accepted_;
+        const long since = since_accepted_;
+        accepted_ = in;
+        has_accepted_ = true;
+        since_accepted_ = 0;
+        const EstimatorStatus s = sample(in, message, reading, age);
+        if (s != EstimatorStatus::ReadingGated) {
+            gated_run_ = 0;
+            return s;
+        }
+        // A torsion no torque explains (sample): not a reading to hold on to.
+        accepted_ = before;
+        has_accepted_ = had;
+        since_accepted_ = since;
+        if (message) why = *message;
+    } else if (has_accepted_) {
+        // Treated as missing: the last accepted reading is held in its place, so
+        // both filters predict over the sample (before any, nothing runs).
+        const EstimatorStatus s = sample(accepted_, message, false, age);
+        if (!recoverable(s)) return s;
+    }
+    ++gated_;
+    // Said once for a run of them: the samples that follow at once are counted (ReadingGated), not said again.
+    const bool first = ++gated_run_ == 1;
+    if (message) message->clear();
+    if (message && first) {
+        std::ostringstream s;
+        s.precision(6);
+        s << "sample " << k << ": a reading no sensor could produce (" << why
+          << "); treated as missing, as is any that follows at once (counted, not said again): both filters "
+             "predicted over it, tau_ukf_std and tau_hat_std grow";
+        *message = s.str();
+    }
+    return EstimatorStatus::ReadingGated;
+}
+
+EstimatorStatus TorqueEstimator::sample(const EstimatorInputs& in, std::string* message, bool reading, double age) {
     if (!std::isfinite(in.i_m) || !std::isfinite(in.theta_m) || !std::isfinite(in.theta_l)) {
         if (message) *message = describe_input(in);
         return EstimatorStatus::InvalidInput;
@@ -52,11 +133,31 @@ EstimatorStatus TorqueEstimator::step(const EstimatorInputs& in, std::string* me
             s << "singular torsion: dtheta_f = " << c.dtheta_f << " rad gives |Cf*Kf*dtheta_f| = "
               << std::fabs(p_.Cf * p_.Kf * backlash_deadzone(c.dtheta_f, p_))
               << " >= pi/2 (theta_m = " << c.theta_m << ", theta_l = " << c.theta_l
-              << "); check N, a0 (encoder offsets), Kf and Cf";
+              << ")";
+            if (samples_ == 0 || singular_run_ >= max_singular_samples())
+                s << "; check N, a0 (encoder offsets), Kf and Cf";
+            if (singular_run_ > 0 && singular_run_ >= max_singular_samples())
+                s << " (no torque has explained the torsion for " << singular_run_ << " samples, since sample "
+                  << samples_ - singular_run_ << ")";
             *message = s.str();
+        }
+        // Once the filters run, a torsion no torque explains is no reading the
+        // joint could produce (a glitch): predicted over, on the last valid
+        // compliance sample, until it has lasted kMaxSingularTime.
+        if (samples_ > 0 && singular_run_ < max_singular_samples()) {
+            ++singular_run_;
+            ComplianceSample held;
+            held.valid = true;
+            held.theta_m = previous_theta_m_;
+            held.tau = out_.tau_compliance;
+            held.dtheta_f = out_.dtheta_f;
+            held.z = out_.hysteresis_torque;
+            predict_held(in, held, nullptr);
+            return EstimatorStatus::ReadingGated;
         }
         return EstimatorStatus::SingularTorsion;
     }
+    singular_run_ = 0;
     if (!c.ready) {
         // The delay line is filling: no angles yet for this current. Show the
         // compliance model on the first angles; the filter waits.

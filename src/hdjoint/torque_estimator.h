@@ -3,6 +3,7 @@
 // UKF of eq. (9)-(31), run at a fixed sample period on encoder angles and
 // motor current; beside them the joint-state filter (tau_hat, beyond the paper).
 #include <algorithm>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,23 @@ const SignalTable<EstimatorInputs, EstimatorOutputs>& estimator_signals();
 // none, so a reading is lost); a reading up to 1.5 samples old keeps it.
 constexpr double kMaxReadingAge = 1.5;
 
+// The gate on readings no sensor could produce (step): a current beyond
+// kWildCurrentMultiple * i_peak (a current sensor's range is a small multiple
+// of its amplifier's peak current), a non-finite value, or an encoder angle
+// that moved further since the last accepted reading than the joint's
+// largest speed allows: omega_m_max (omega_m_max/N for the link) times the
+// time since then plus kMaxReadingAge samples (a late reading), plus
+// kJumpCounts counts of the encoder (0 counts: no quantisation). Such a
+// reading is treated as missing: both filters predict over it (status
+// ReadingGated); the estimate never sees it.
+// Once the filters run, a torsion no torque explains (|Cf*Kf*dtheta_f| >=
+// pi/2) is gated the same way, until it has lasted kMaxSingularTime: then it
+// is no glitch but the model (N, a0, Kf, Cf), and the estimator stops
+// (SingularTorsion).
+constexpr double kWildCurrentMultiple = 10.0;
+constexpr double kJumpCounts = 2.0;
+constexpr double kMaxSingularTime = 0.1;  // s
+
 enum class EstimatorStatus {
     Ok,
     CovarianceRepaired,  // the UKF repaired an indefinite covariance (can go on)
@@ -43,6 +61,7 @@ enum class EstimatorStatus {
     UpdateSkipped,       // the measurement update was skipped (can go on)
     ReadingsHeld,        // a gap: a step held its inputs over several samples; the filters predicted over the later ones
     SampleRejected,      // the joint-state filter rejected an outlier sample and predicted over it (can go on)
+    ReadingGated,        // a reading no sensor could produce (see kWildCurrentMultiple): both filters predicted over it
     SingularTorsion,     // |Cf*Kf*dtheta_f| >= pi/2: no torque explains the torsion
     InvalidInput,        // NaN or infinite input
     StepTooLong,         // a step would run more than SampleClock::kMaxSamplesPerStep samples
@@ -72,7 +91,8 @@ public:
     // both filters without readings (status ReadingsHeld; the deviations
     // widen), never fed the same angles as if the joint had stopped. Returns
     // the worst status (StepTooLong, with nothing run, beyond the step bound)
-    // and the message of the first sample that was not Ok.
+    // and the message of the first sample that was not Ok (of the failing
+    // sample, when one fails).
     template <class AfterSample>
     EstimatorStatus advance_to(double end, double read_at, const EstimatorInputs& in, std::string* message,
                                AfterSample after_sample);
@@ -95,6 +115,8 @@ public:
     const EstimatorOutputs& outputs() const { return out_; }
     const Parameters& parameters() const { return p_; }
     long samples() const { return samples_; }
+    // Readings gated so far (status ReadingGated).
+    long readings_gated() const { return gated_; }
     // Eq. (11)'s input of the last sample: Kt*i_m (+ cogging) - tau_fm(omega_m, t).
     double ukf_input() const { return previous_u_; }
 
@@ -109,11 +131,17 @@ public:
     const JointStateFilter& joint_filter() const { return joint_; }
 
 private:
+    // Why `in` is a reading no sensor could produce (see kWildCurrentMultiple), or "".
+    std::string wild(const EstimatorInputs& in) const;
+    // One sample on readings that passed the gate (or, held, in their place).
+    EstimatorStatus sample(const EstimatorInputs& in, std::string* message, bool reading, double age);
+    long max_singular_samples() const { return static_cast<long>(std::ceil(kMaxSingularTime / p_.Ts)); }
     // A sample whose readings were held (see step): both filters predict.
     EstimatorStatus predict_held(const EstimatorInputs& in, const ComplianceSample& c, std::string* message);
     // Outputs that show the compliance model only (before the filters start).
     void show_compliance(double tau, double dtheta_f);
-    static constexpr long kStateVersion = 9;  // 6: samples_held; 7: the torque error e; 8: the filter's hysteresis; 9: the current sensor's gain
+    // 6: samples_held; 7: the torque error e; 8: the filter's hysteresis; 9: the current sensor's gain; 10: the gate
+    static constexpr long kStateVersion = 10;
 
     Parameters p_;
     PaperSystemModel system_;
@@ -130,6 +158,13 @@ private:
     double nis_mean_ukf_ = 1.0, nis_mean_hat_ = 1.0;
     long samples_ = 0;
     long samples_held_ = 0;  // samples predicted without a reading since the last reading (the UKF's speed spans them)
+    // The gate: the last accepted reading, the samples since it, the readings gated.
+    EstimatorInputs accepted_{};
+    bool has_accepted_ = false;
+    long since_accepted_ = 0;
+    long gated_ = 0;
+    long singular_run_ = 0;  // samples in a row whose torsion no torque explained
+    long gated_run_ = 0;     // readings in a row gated (the first is said, the others counted)
     SampleClock clock_;
 };
 
@@ -147,7 +182,10 @@ EstimatorStatus TorqueEstimator::advance_to(double end, double read_at, const Es
         first_sample = false;
         if (s != EstimatorStatus::Ok && first.empty()) first = m;
         worst = std::max(worst, s);
-        if (!recoverable(s)) return false;
+        if (!recoverable(s)) {
+            first = m;  // the failure's own message, not an earlier sample's warning
+            return false;
+        }
         after_sample();
         return true;
     }, &first);
@@ -162,7 +200,11 @@ bool TorqueEstimator::fields(Archive& a) {
     return a("estimator_state_version", version, kStateVersion, kStateVersion) && a("ukf_state", ukf_.state()) &&
            a("ukf_covariance", ukf_.covariance()) && a("previous_theta_m", previous_theta_m_) &&
            a("previous_u", previous_u_) && a("nis_mean_ukf", nis_mean_ukf_) && a("nis_mean_hat", nis_mean_hat_) &&
-           a("samples_held", samples_held_) &&
+           a("samples_held", samples_held_) && a("gate_has_reading", has_accepted_) &&
+           a("gate_i_m", accepted_.i_m) && a("gate_theta_m", accepted_.theta_m) &&
+           a("gate_theta_l", accepted_.theta_l) && a("gate_samples_since", since_accepted_) &&
+           a("readings_gated", gated_) && a("singular_run", singular_run_) &&
+           a("gated_run", gated_run_) &&
            output_fields(a, estimator_signals(), out_) &&
            a.part("compliance_model", compliance_) && a.part("joint_state_filter", joint_) &&
            a("samples", samples_) && clock_.fields(a);

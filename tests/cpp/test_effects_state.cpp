@@ -79,9 +79,10 @@ TEST(EffectsState, EstimatorRestoresExactly) {
         TorqueEstimator a(p);
         for (int k = 0; k < split; ++k) ASSERT_TRUE(recoverable(a.step(inputs[k])));
         const std::vector<double> saved = a.save_state();
-        // estimator (version, UKF 6, 2 previous values, 10 outputs, 2 NIS means, samples held),
-        // compliance model with a 3-sample delay line, joint-state filter, samples and the sample clock (2)
-        EXPECT_EQ(saved.size(), 22u + 4u + 2u * 3u + JointStateFilter::kSavedSize + 3u);
+        // estimator (version, UKF 6, 2 previous values, 10 outputs, 2 NIS means, samples held), the gate
+        // (has a reading, its 3 values, samples since, readings gated, singular and gated runs), compliance
+        // model with a 3-sample delay line, joint-state filter, samples and the sample clock (2)
+        EXPECT_EQ(saved.size(), 22u + 8u + 4u + 2u * 3u + JointStateFilter::kSavedSize + 3u);
         for (int k = split; k < 1000; ++k) ASSERT_TRUE(recoverable(a.step(inputs[k])));
         TorqueEstimator b(p);
         ASSERT_TRUE(b.load_state(saved));

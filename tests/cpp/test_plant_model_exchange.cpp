@@ -31,33 +31,34 @@ TEST(PlantModelExchange, SetStateAndTimeRoundTrip) {
     // The derivative at the placed state is the right-hand side ROS2 integrates.
     PlantFullState a, b;
     ASSERT_TRUE(plant.derivative(x, 0.5, {0.3, 0.0}, &a, nullptr));
-    ASSERT_TRUE(plant.derivative(plant.full_state(), plant.time(), {0.3, 0.0}, &b, nullptr, true));
-    EXPECT_EQ(a, b);  // inside the domain, saturation changes nothing
+    ASSERT_TRUE(plant.derivative(plant.full_state(), plant.time(), {0.3, 0.0}, &b, nullptr));
+    EXPECT_EQ(a, b);
+    EXPECT_TRUE(plant.physical(x));
 }
 
-// Beyond the atan law's asymptote the integrator's right-hand side fails (its
-// substep is retried in halves); Model Exchange's holds the torque at the
-// transmission's largest and pulls the state back.
-TEST(PlantModelExchange, BeyondTheAsymptoteTheTorqueIsHeldAndRestoring) {
+// Beyond the atan law's asymptote no torque explains the torsion: the
+// right-hand side fails (the integrator retries its substep in halves, then
+// reports a singular torsion) and the state is not physical, which Model
+// Exchange refuses.
+TEST(PlantModelExchange, BeyondTheAsymptoteTheStateIsNotPhysical) {
     const Parameters p = without_kinematic_error();
     JointPlant plant(p);
     ASSERT_TRUE(plant.initialize(0.0));
     const double asymptote = M_PI / (2.0 * p.Cf * p.Kf);
     PlantFullState x = PlantFullState::Zero();
-    x(0) = p.N * 2.0 * asymptote;  // elastic torsion twice the asymptote
-    PlantFullState dx;
-    EXPECT_FALSE(plant.derivative(x, 0.0, {0.0, 0.0}, &dx, nullptr));
-    ASSERT_TRUE(plant.derivative(x, 0.0, {0.0, 0.0}, &dx, nullptr, true));
-    ASSERT_TRUE(dx.allFinite());
-    EXPECT_NEAR(dx(1), -JointPlant::kSaturatedTorque / (p.N * p.Jm), 1e-6 * JointPlant::kSaturatedTorque / (p.N * p.Jm));
-    EXPECT_GT(dx(3), 0.0);  // the link is pulled after the motor
-    x(0) = -x(0);
-    ASSERT_TRUE(plant.derivative(x, 0.0, {0.0, 0.0}, &dx, nullptr, true));
-    EXPECT_GT(dx(1), 0.0);
-    // The outputs follow: the torque shown is the one held.
-    plant.set_full_state(x);
-    EXPECT_TRUE(std::isnan(plant.outputs().tau_joint));
-    EXPECT_EQ(plant.outputs(true).tau_joint, -JointPlant::kSaturatedTorque);
+    for (double torsion : {0.5 * asymptote, -0.5 * asymptote, 2.0 * asymptote, -2.0 * asymptote}) {
+        x(0) = p.N * torsion;
+        const bool inside = std::fabs(torsion) < asymptote;  // the wave generator adds 4 % at most
+        PlantFullState dx;
+        double elastic = 0.0;
+        EXPECT_EQ(plant.derivative(x, 0.0, {0.0, 0.0}, &dx, nullptr), inside) << torsion;
+        EXPECT_EQ(plant.physical(x, &elastic), inside) << torsion;
+        EXPECT_NEAR(elastic, torsion, 1e-12) << torsion;
+        plant.set_full_state(x);
+        EXPECT_EQ(std::isnan(plant.outputs().tau_joint), !inside) << torsion;
+    }
+    x(0) = std::nan("");
+    EXPECT_FALSE(plant.physical(x));
 }
 
 TEST(PlantModelExchange, EventIndicatorsCrossZeroAtTheBacklashEdges) {

@@ -70,7 +70,7 @@ TEST(PaperUkfModels, MeasurementModelIsSpeedAndEq5Torsion) {
     }
 }
 
-TEST(TorqueEstimator, NaNOrInfiniteInputIsRejectedAndNamed) {
+TEST(TorqueEstimator, NaNOrInfiniteInputIsTreatedAsMissingAndNamed) {
     const Parameters p;
     struct Case {
         double EstimatorInputs::*field;
@@ -85,47 +85,172 @@ TEST(TorqueEstimator, NaNOrInfiniteInputIsRejectedAndNamed) {
             EstimatorInputs in = static_load(1.0, 0.5, p);
             in.*(c.field) = bad;
             std::string msg;
-            EXPECT_EQ(est.step(in, &msg), EstimatorStatus::InvalidInput) << c.name;
+            EXPECT_EQ(est.step(in, &msg), EstimatorStatus::ReadingGated) << c.name;
             EXPECT_NE(msg.find(c.name), std::string::npos) << msg;
             EXPECT_NE(msg.find("not finite"), std::string::npos) << msg;
-            EXPECT_FALSE(recoverable(EstimatorStatus::InvalidInput));
-            // Nothing was consumed: the sample count and outputs are unchanged.
-            EXPECT_EQ(est.samples(), 1);
-            EXPECT_EQ(est.outputs().tau_ukf, before.tau_ukf);
-            // ... and a good sample afterwards is processed.
-            EXPECT_EQ(est.step(static_load(1.0, 0.5, p)), EstimatorStatus::Ok);
+            EXPECT_NE(msg.find("treated as missing"), std::string::npos) << msg;
+            EXPECT_TRUE(recoverable(EstimatorStatus::ReadingGated));
+            // A sample predicted over: counted, the estimate finite, its deviation wider.
             EXPECT_EQ(est.samples(), 2);
+            EXPECT_EQ(est.readings_gated(), 1);
+            EXPECT_TRUE(std::isfinite(est.outputs().tau_ukf));
+            EXPECT_GT(est.outputs().tau_ukf_std, before.tau_ukf_std);
+            EXPECT_GT(est.outputs().tau_hat_std, before.tau_hat_std);
+            // ... and a good sample afterwards is processed.
+            EXPECT_TRUE(recoverable(est.step(static_load(1.0, 0.5, p))));
+            EXPECT_EQ(est.samples(), 3);
             EXPECT_TRUE(std::isfinite(est.outputs().tau_ukf));
         }
     }
-    // Works without a message pointer too.
+    // Before any reading there is nothing to predict from: nothing runs. Works without a message pointer too.
     TorqueEstimator est(p);
     EstimatorInputs in;
     in.theta_l = kNaN;
-    EXPECT_EQ(est.step(in), EstimatorStatus::InvalidInput);
+    EXPECT_EQ(est.step(in), EstimatorStatus::ReadingGated);
+    EXPECT_EQ(est.samples(), 0);
+    EXPECT_EQ(est.step(static_load(1.0, 0.5, p)), EstimatorStatus::Ok);
+    EXPECT_EQ(est.samples(), 1);
+}
+
+std::vector<EstimatorInputs> varying_inputs(const Parameters& p, int n, int offset);
+
+// A run of the estimator on `inputs`, with `edit(k, &in)` changing sample k's inputs.
+template <class Edit>
+std::vector<EstimatorOutputs> run_edited(const Parameters& p, const std::vector<EstimatorInputs>& inputs, Edit edit,
+                                         std::vector<EstimatorStatus>* statuses = nullptr) {
+    TorqueEstimator est(p);
+    std::vector<EstimatorOutputs> out;
+    for (std::size_t k = 0; k < inputs.size(); ++k) {
+        EstimatorInputs in = inputs[k];
+        edit(static_cast<int>(k), &in);
+        const EstimatorStatus s = est.step(in);
+        EXPECT_TRUE(recoverable(s)) << k;
+        if (statuses) statuses->push_back(s);
+        out.push_back(est.outputs());
+    }
+    return out;
+}
+
+TEST(TorqueEstimator, WildReadingsAreGatedAndBothFiltersRecoverWithinATenthOfASecond) {
+    const Parameters p;
+    const auto inputs = varying_inputs(p, 700, 0);
+    const auto clean = run_edited(p, inputs, [](int, EstimatorInputs*) {});
+    const double count_m = 2.0 * M_PI / p.motor_counts, count_l = 2.0 * M_PI / p.link_counts;
+    struct Case {
+        const char* name;
+        int first, last;  // the wild samples
+        double EstimatorInputs::*field;
+        double value;  // set, or added when `add`
+        bool add;
+    };
+    for (const Case& c : {Case{"i_m = 1e30", 300, 300, &EstimatorInputs::i_m, 1e30, false},
+                          Case{"i_m = -1e200", 300, 300, &EstimatorInputs::i_m, -1e200, false},
+                          Case{"i_m beyond 10 x i_peak", 300, 302, &EstimatorInputs::i_m, 10.1 * p.i_peak, false},
+                          Case{"NaN burst on theta_m", 300, 340, &EstimatorInputs::theta_m, kNaN, false},
+                          Case{"theta_m = 1e30", 300, 300, &EstimatorInputs::theta_m, 1e30, false},
+                          Case{"theta_m + 1000 counts", 300, 310, &EstimatorInputs::theta_m, 1000.0 * count_m, true},
+                          Case{"theta_l + 1000 counts", 300, 300, &EstimatorInputs::theta_l, 1000.0 * count_l, true},
+                          Case{"theta_l - 1000 counts", 300, 320, &EstimatorInputs::theta_l, -1000.0 * count_l,
+                               true}}) {
+        std::vector<EstimatorStatus> statuses;
+        const auto got = run_edited(p, inputs, [&](int k, EstimatorInputs* in) {
+            if (k >= c.first && k <= c.last) in->*(c.field) = c.add ? in->*(c.field) + c.value : c.value;
+        }, &statuses);
+        for (int k = c.first; k <= c.last; ++k) {
+            EXPECT_EQ(statuses[k], EstimatorStatus::ReadingGated) << c.name << " at " << k;
+            EXPECT_GE(got[k].tau_ukf_std, got[c.first - 1].tau_ukf_std) << c.name << " at " << k;
+        }
+        for (std::size_t k = 0; k < got.size(); ++k) {
+            ASSERT_TRUE(std::isfinite(got[k].tau_ukf) && std::isfinite(got[k].tau_hat)) << c.name << " at " << k;
+            if (static_cast<int>(k) < c.first) {
+                EXPECT_EQ(got[k].tau_ukf, clean[k].tau_ukf) << c.name;
+            }
+        }
+        // 0.1 s after the last wild sample both filters are back on the clean run's estimate.
+        const std::size_t back = static_cast<std::size_t>(c.last) + static_cast<std::size_t>(std::ceil(0.1 / p.Ts));
+        for (std::size_t k = back; k < got.size(); ++k) {
+            EXPECT_NEAR(got[k].tau_ukf, clean[k].tau_ukf, 0.05) << c.name << " at " << k;
+            EXPECT_NEAR(got[k].omega_m, clean[k].omega_m, 0.5) << c.name << " at " << k;
+            EXPECT_NEAR(got[k].tau_hat, clean[k].tau_hat, 0.05) << c.name << " at " << k;
+        }
+    }
+}
+
+TEST(TorqueEstimator, AReadingTheJointCanMakeIsNotGated) {
+    // The encoder moving at just under omega_m_max, the current just inside its bound: every reading passes.
+    Parameters p;
+    const double w = 0.99 * p.omega_m_max;
+    TorqueEstimator est(p);
+    for (int k = 0; k < 50; ++k) {
+        EstimatorInputs in;
+        in.i_m = 0.99 * kWildCurrentMultiple * p.i_peak * (k % 2 ? 1.0 : -1.0);
+        in.theta_m = w * k * p.Ts;
+        in.theta_l = consistent_theta_l(0.0, 0.0, in.theta_m, p);
+        ASSERT_NE(est.step(in), EstimatorStatus::ReadingGated) << k;
+    }
+    EXPECT_EQ(est.readings_gated(), 0);
 }
 
 TEST(TorqueEstimator, SingularTorsionIsReported) {
     const Parameters p;
-    TorqueEstimator est(p);
-    ASSERT_EQ(est.step(static_load(2.0, 0.0, p)), EstimatorStatus::Ok);
-    EstimatorInputs in = static_load(2.0, 0.0, p);
-    in.theta_m += 1000.0 * p.N;  // a huge encoder offset: 1000 rad of torsion
-    std::string msg;
-    EXPECT_EQ(est.step(in, &msg), EstimatorStatus::SingularTorsion);
-    EXPECT_NE(msg.find("singular torsion"), std::string::npos) << msg;
-    EXPECT_FALSE(recoverable(EstimatorStatus::SingularTorsion));
-    EXPECT_EQ(est.samples(), 1);
-    // Negative side too.
-    in.theta_m = -1000.0 * p.N;
-    EXPECT_EQ(est.step(in, &msg), EstimatorStatus::SingularTorsion);
-    // The estimator goes on with good samples.
-    EXPECT_EQ(est.step(static_load(2.0, 0.0, p)), EstimatorStatus::Ok);
-    EXPECT_TRUE(std::isfinite(est.outputs().tau_ukf));
+    {
+        // On the first sample: the model (or the encoders' offsets) is wrong.
+        TorqueEstimator est(p);
+        EstimatorInputs in = static_load(2.0, 0.0, p);
+        in.theta_m += 0.5;  // 5 mrad of torsion: beyond the atan law's asymptote
+        std::string msg;
+        EXPECT_EQ(est.step(in, &msg), EstimatorStatus::SingularTorsion);
+        EXPECT_NE(msg.find("singular torsion"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("check N, a0"), std::string::npos) << msg;
+        EXPECT_FALSE(recoverable(EstimatorStatus::SingularTorsion));
+        EXPECT_EQ(est.samples(), 0);
+    }
+    for (double offset : {0.5, -0.5}) {
+        // Once the filters run: a glitch, predicted over, until it has lasted kMaxSingularTime.
+        TorqueEstimator est(p);
+        ASSERT_EQ(est.step(static_load(2.0, 0.0, p)), EstimatorStatus::Ok);
+        EstimatorInputs in = static_load(2.0, 0.0, p);
+        in.theta_m += offset;  // a move the joint can make in a sample, to a torsion beyond the asymptote
+        const long limit = static_cast<long>(std::ceil(kMaxSingularTime / p.Ts));
+        std::string msg;
+        for (long k = 0; k < limit; ++k) {
+            ASSERT_EQ(est.step(in, &msg), EstimatorStatus::ReadingGated) << k;
+            // Said once, at the first of the run; the others are counted.
+            if (k == 0) {
+                EXPECT_NE(msg.find("singular torsion"), std::string::npos) << msg;
+            } else {
+                EXPECT_EQ(msg, "") << k;
+            }
+            EXPECT_TRUE(std::isfinite(est.outputs().tau_ukf));
+        }
+        EXPECT_EQ(est.readings_gated(), limit);
+        EXPECT_EQ(est.step(in, &msg), EstimatorStatus::SingularTorsion);
+        EXPECT_NE(msg.find("check N, a0"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("since sample 1"), std::string::npos) << msg;
+        // The estimator goes on with good samples.
+        EXPECT_EQ(est.step(static_load(2.0, 0.0, p)), EstimatorStatus::Ok);
+        EXPECT_TRUE(std::isfinite(est.outputs().tau_ukf));
+    }
+    {
+        // A short glitch: gated, and the next good sample is taken.
+        TorqueEstimator est(p);
+        ASSERT_EQ(est.step(static_load(2.0, 0.0, p)), EstimatorStatus::Ok);
+        EstimatorInputs in = static_load(2.0, 0.0, p);
+        in.theta_m += 0.5;
+        EXPECT_EQ(est.step(in), EstimatorStatus::ReadingGated);
+        EXPECT_TRUE(recoverable(est.step(static_load(2.0, 0.0, p))));
+        EXPECT_EQ(est.readings_gated(), 1);
+        // A huge encoder offset (1000 rad of torsion) is a jump no joint makes in a sample: gated by its size.
+        in.theta_m = 1000.0 * p.N;
+        std::string msg;
+        EXPECT_EQ(est.step(in, &msg), EstimatorStatus::ReadingGated);
+        EXPECT_NE(msg.find("theta_m moved"), std::string::npos) << msg;
+    }
 }
 
 TEST(TorqueEstimator, RecoverableStatuses) {
     EXPECT_TRUE(recoverable(EstimatorStatus::Ok));
+    EXPECT_TRUE(recoverable(EstimatorStatus::ReadingGated));
     EXPECT_TRUE(recoverable(EstimatorStatus::CovarianceRepaired));
     EXPECT_TRUE(recoverable(EstimatorStatus::CovarianceReset));
     EXPECT_TRUE(recoverable(EstimatorStatus::UpdateSkipped));

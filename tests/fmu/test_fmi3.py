@@ -12,12 +12,11 @@ import fmpy
 import numpy as np
 import pytest
 from fmpy import simulate_fmu
-from fmpy.fmi3 import FMU3Slave
 from fmpy.validation import validate_fmu
 
 from hdjoint.fmu.shipped import FMU_NAMES, fmu_path
 
-from conftest import ESTIMATOR, JOINT
+from conftest import ESTIMATOR, JOINT, Twin
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 
@@ -66,35 +65,6 @@ def test_fmi3_outputs_equal_fmi2_outputs_bit_for_bit(name):
 
 
 # ---------------------------------------------------------------- the glue through fmpy's FMU3Slave
-
-
-class Twin:
-    """An FMU3Slave of a twin with its log messages recorded."""
-
-    def __init__(self, name, tmp_path, **instantiate):
-        self.unzipdir = fmpy.extract(str(fmu_path(name, 3)), str(tmp_path / f"{name}_3"))
-        self.md = fmpy.read_model_description(self.unzipdir)
-        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
-        self.messages: list[str] = []
-        self.slave = FMU3Slave(guid=self.md.guid, unzipDirectory=self.unzipdir,
-                               modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName="twin")
-        self.slave.instantiate(logMessage=self._log, **instantiate)
-
-    def _log(self, env, status, category, message):
-        self.messages.append(message.decode())
-
-    def refused(self, call, *args) -> str:
-        with pytest.raises(Exception):
-            call(*args)
-        return self.messages[-1]
-
-    def start(self, stop=None):
-        self.slave.enterInitializationMode(startTime=0.0, stopTime=stop)
-        self.slave.exitInitializationMode()
-
-    def outputs(self):
-        names = [v.name for v in self.md.modelVariables if v.causality == "output"]
-        return np.array(self.slave.getFloat64([self.vr[n] for n in names]))
 
 
 def test_fmi3_state_machine_is_enforced(tmp_path):

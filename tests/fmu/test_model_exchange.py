@@ -145,3 +145,71 @@ def test_state_events_at_the_backlash_edges_match_a_fine_step_reference(paper_cu
     assert len(events) >= 3, "the teeth never separated: the test shows nothing"
     assert len(events) == len(crossings), (events, crossings)
     assert np.max(np.abs(events - crossings)) <= fine_step / 10, (events, crossings)
+
+
+def _recording_logger(fmi, messages):
+    """A logger for fmpy (FMI 2.0's or 3.0's signature) that appends each message to MESSAGES."""
+    if fmi == 2:
+        return lambda env, instance, status, category, message: messages.append(message.decode())
+    return lambda env, status, category, message: messages.append(message.decode())
+
+
+# fmpy's CVode right-hand side is a ctypes callback: the FMU's refusal is raised there, reported as
+# unraisable, and raised again by the next call outside it.
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_model_exchange_refuses_what_co_simulation_refuses(fmi):
+    """i_m = 1e30 drives the flexspline beyond its asymptote: Co-Simulation fails the step (singular
+    torsion). Model Exchange, through fmpy's CVode, fails too with the FMU's logged message (it held the
+    torque at +-1e12 N.m there and ran on): a state outside the joint's physical range is refused."""
+    path = str(fmu_path(JOINT, fmi))
+    inputs = np.array([(0.0, 1e30, 0.0), (0.01, 1e30, 0.0)], dtype=[("time", float), ("i_m", float),
+                                                                    ("tau_ext", float)])
+    messages: list[str] = []
+    logger = _recording_logger(fmi, messages)
+    with pytest.raises(Exception):
+        simulate_fmu(path, stop_time=0.01, input=inputs, output=["tau_joint"])
+    with pytest.raises(Exception):
+        simulate_fmu(path, fmi_type="ModelExchange", stop_time=0.01, input=inputs, output=["tau_joint"],
+                     logger=logger)
+    refusals = [m for m in messages if "outside the joint's physical range" in m]
+    assert refusals, messages
+    assert refusals[0].startswith(("fmi2SetContinuousStates", "fmi3SetContinuousStates", "fmi2GetDerivatives",
+                                   "fmi3GetContinuousStateDerivatives")), refusals[0]
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_a_state_beyond_the_asymptote_is_refused_where_it_is_set(fmi, tmp_path):
+    """fmi2/fmi3SetContinuousStates refuse a state the joint cannot be in (its torsion beyond the atan law's
+    asymptote) with a message naming the call, and leave the instance in the error state."""
+    import ctypes
+
+    import fmpy
+    from fmpy.fmi1 import FMICallException
+    from fmpy.simulation import instantiate_fmu
+    unzipdir = fmpy.extract(str(fmu_path(JOINT, fmi)), str(tmp_path / "me"))
+    md = read_model_description(unzipdir)
+    messages: list[str] = []
+    logger = _recording_logger(fmi, messages)
+    fmu = instantiate_fmu(unzipdir, md, "ModelExchange", logger=logger)
+    try:
+        if fmi == 2:
+            fmu.setupExperiment(startTime=0.0)
+        fmu.enterInitializationMode()
+        fmu.exitInitializationMode()
+        fmu.newDiscreteStates() if fmi == 2 else fmu.updateDiscreteStates()
+        fmu.enterContinuousTimeMode()
+        x = (ctypes.c_double * 7)()
+        fmu.getContinuousStates(x, 7)
+        p = parameters.defaults()
+        x[0] += p["N"] * np.pi / (p["Cf"] * p["Kf"])  # twice the asymptote's torsion, on the motor side
+        with pytest.raises(FMICallException):
+            fmu.setContinuousStates(x, 7)
+        function = f"fmi{fmi}SetContinuousStates"
+        assert messages and messages[-1].startswith(function), messages
+        assert "outside the joint's physical range" in messages[-1], messages[-1]
+        dx = (ctypes.c_double * 7)()
+        with pytest.raises(FMICallException):  # in the error state now
+            fmu.getDerivatives(dx, 7) if fmi == 2 else fmu.getContinuousStateDerivatives(dx, 7)
+    finally:
+        fmu.freeInstance()

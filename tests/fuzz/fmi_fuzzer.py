@@ -105,6 +105,12 @@ STATE_SLOT = 2  # header: magic, version, state, time, start, stop, stop-defined
 BACKSTOP_FACTOR = 30
 
 LEGAL_STEPS = (1e-3, 2e-3, 1e-2, 0.1)
+
+
+def legal_times(start, stop) -> bool:
+    """An experiment's times: a finite start, and no stop time or a finite one at or after it (an infinite
+    stop time could not be saved in an FMU state and restored)."""
+    return math.isfinite(start) and (stop is None or (math.isfinite(stop) and stop >= start))
 EXTREME_STEPS = (215.0, 1e5, 2.2e5, 1e6, 1e300)
 BAD_NUMBERS = (math.nan, math.inf, -math.inf)
 FMU_NAMES = ("JointTorqueEstimator", "HarmonicDriveJoint", "JointController")
@@ -362,7 +368,7 @@ class Child:
 
     def _setup(self, op, legal):
         start, stop = op[1], op[2]
-        ok = math.isfinite(start) and (stop is None or stop >= start)
+        ok = legal_times(start, stop)
         if self.fmu.fmi == 3:  # the times go with fmi3EnterInitializationMode
             if self.model.state == INSTANTIATED:
                 self._pending = (start, stop)
@@ -374,7 +380,7 @@ class Child:
         if self.fmu.fmi == 2:
             return self.calls.EnterInitializationMode(self.component), None
         start, stop = self._pending
-        ok = math.isfinite(start) and (stop is None or stop >= start)
+        ok = legal_times(start, stop)
         return self.calls.EnterInitializationMode(self.component, False, 0.0, start, stop is not None,
                                                   0.0 if stop is None else stop), ok
 
@@ -413,10 +419,8 @@ class Child:
         else:
             status = self.calls.DoStep(self.component, t, h, 1)
         m = self.model
-        if not (math.isfinite(t) and math.isfinite(h)) or h < 0:
+        if not (math.isfinite(t) and math.isfinite(h)) or not h > 0:  # the step size must be > 0 (0 and -0 too)
             return status, False
-        if h == 0:
-            return status, (None if status < ERROR else True)
         off = abs(t - m.time)
         if off > 1e-6 * max(1.0, abs(m.time)):
             return status, False
@@ -726,7 +730,7 @@ def generate(fmu: LoadedFmu, seed: int, length: int = 40) -> list[list]:
             t, stop, phase = 0.0, None, INSTANTIATED
         elif r < 0.12:
             start = rng.choice([0.0, 1.5, -2.0, math.nan, 1e15])
-            ops.append(["setup", start, rng.choice([None, start + 10.0, start - 1.0])])
+            ops.append(["setup", start, rng.choice([None, start + 10.0, start - 1.0, math.inf])])
         elif r < 0.15:
             ops.append([rng.choice(["enter", "exit", "terminate"])])
         elif r < 0.35:

@@ -24,16 +24,18 @@ def warn_fmu_messages(path, messages) -> None:
 
 class RejectedSamples:
     """The rows whose step the filters predicted over (the batch status column): outliers the joint-state
-    filter rejected, and gaps (a step that held its inputs over several samples), to say where."""
+    filter rejected, gaps (a step that held its inputs over several samples) and readings no sensor could
+    produce (gated: treated as missing), to say where."""
 
     def __init__(self, path):
         self.path = path
-        self.count, self.first = {"rejected": 0, "held": 0}, {"rejected": [], "held": []}
+        self.count, self.first = {"rejected": 0, "held": 0, "gated": 0}, {"rejected": [], "held": [], "gated": []}
 
     def add(self, time, status) -> None:
         from hdjoint import _core
         status = np.asarray(status)
-        for kind, code in (("rejected", _core.STATUS_SAMPLE_REJECTED), ("held", _core.STATUS_READINGS_HELD)):
+        for kind, code in (("rejected", _core.STATUS_SAMPLE_REJECTED), ("held", _core.STATUS_READINGS_HELD),
+                           ("gated", _core.STATUS_READING_GATED)):
             rows = np.flatnonzero(status == code)
             self.count[kind] += rows.size
             self.first[kind] += [float(time[j]) for j in rows[:SHOWN_WARNINGS - len(self.first[kind])]]
@@ -43,10 +45,16 @@ class RejectedSamples:
         return f"{', '.join(f'{t:g} s' for t in self.first[kind])}{more}"
 
     def warn(self) -> None:
+        from hdjoint import _core
         if self.count["rejected"]:
             print(f"warning: {printable(self.path)}: the joint-state filter rejected {self.count['rejected']} "
                   "outlier sample(s) "
                   f"and predicted over them (at {self._where('rejected')}); tau_hat_std grows there", file=sys.stderr)
+        if self.count["gated"]:
+            print(f"warning: {self.path}: {self.count['gated']} row(s) hold a reading no sensor could produce (a "
+                  f"current beyond {_core.WILD_CURRENT_MULTIPLE:g} x i_peak, a non-finite value or an encoder jump "
+                  f"faster than omega_m_max, at {self._where('gated')}): treated as missing, the filters predicted "
+                  "over them; tau_ukf_std and tau_hat_std grow there", file=sys.stderr)
         if self.count["held"]:
             print(f"warning: {printable(self.path)}: {self.count['held']} row(s) step over more than one sample "
                   "(a gap, at "
