@@ -41,7 +41,7 @@ from lara8_data import DATA, JOINTS, K1, KT, TOOTH_RATIO, generated_by, halves, 
 from lara8_torsion import regress  # noqa: E402
 
 from hdjoint.io import parameters  # noqa: E402
-from hdjoint.diagnosis.search.hypothesis_search import torsion_orders
+from hdjoint.diagnosis.search import torsion_orders
 from hdjoint.diagnosis.model.kinematics import folds  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -96,7 +96,7 @@ def test_trend_false_alarm_rate_on_series_without_drift():
     for _ in range(2000):
         se = 0.05 * rng.uniform(0.5, 2.0, days.size)
         y = 1.0 + rng.normal(0.0, se)
-        half = trend.Z95 * se * rng.uniform(0.3, 3.0)
+        half = trend.INTERVAL_Z * se * rng.uniform(0.3, 3.0)
         alarms.append(trend.slope_test(days, y, y - half, y + half)[2] < trend.ALPHA)
     assert 0.035 < np.mean(alarms) < 0.065
 
