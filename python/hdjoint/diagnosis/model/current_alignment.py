@@ -9,14 +9,11 @@ t_k+1, so the encoders' acceleration at t_k, smoothed symmetrically, matches
 sampled, the motor equation then carries N*Kt*Ts/2*di/dt, which on a chirp
 or a constant-speed run with current steps reads as unexplained structure.
 
-Which convention a logger follows is not in the recording, and a current
-sensor reads late by its transducer's and anti-alias filter's lag and its
-converter's delay (tens of microseconds on LEM and Allegro datasheets, more
-behind a drive's averaging), so both are calibrated as one nuisance: a shift
-in [-Ts/2, +Ts/2] of the current (i_delay's sense: the current at t is the
-logged one at t + shift), fitted once on the motor channels after the first
-calibration pass. Only a delay beyond it is a finding (the `time_delay`
-effect, i_delay >= 0, tested on top).
+Which convention a logger follows is not in the recording, so it is
+calibrated: a shift in [-Ts/2, 0] of the current (i_delay's sense: the
+current at t is the logged one at t + shift), fitted once on the motor
+channels after the first calibration pass. Anything beyond it is a delay
+of the current (the `time_delay` effect, i_delay >= 0, tested on top).
 
 Within one sample the charge the motor equation differentiates
 (channels.current_charge) is quadratic in the shift, so the residual is
@@ -33,14 +30,14 @@ from hdjoint.diagnosis.rules import INTERVAL_Z
 
 
 def fit_shift(residual, step: float) -> tuple[float, float]:
-    """The least-squares shift in [-step/2, step/2] of `residual(shift)` (a
-    vector, linear in the shift within one sample) and the curvature of its sum of squares."""
+    """The least-squares shift in [-step/2, 0] of `residual(shift)` (a vector,
+    linear in the shift within one sample) and the curvature of its sum of squares."""
     held = -0.5 * step
     r0, r1 = residual(0.0), residual(held)
     finite = np.isfinite(r0) & np.isfinite(r1)  # NaN where the torsion is singular
     r0, slope = r0[finite], (r1[finite] - r0[finite]) / held
     curvature = float(slope @ slope)
-    estimate = float(np.clip(-(r0 @ slope) / curvature, held, -held)) if curvature > 0 else 0.0
+    estimate = float(np.clip(-(r0 @ slope) / curvature, held, 0.0)) if curvature > 0 else 0.0
     return estimate, curvature
 
 
@@ -62,7 +59,7 @@ def align_current(diag, p: dict) -> dict | None:
     # Laplace on the data term (weighted as the calibration's), flat within the bounds.
     std = 1.0 / math.sqrt(diag.data_weight * curvature) if curvature > 0 else math.inf
     half = INTERVAL_Z * std
-    return {"estimate": estimate, "lo": float(max(estimate - half, held)), "hi": float(min(estimate + half, -held)),
-            "bounds": [held, -held], "unit": "s",
+    return {"estimate": estimate, "lo": float(max(estimate - half, held)), "hi": float(min(estimate + half, 0.0)),
+            "bounds": [held, 0.0], "unit": "s",
             "meaning": "the current at an encoder sample is the logged one read this much later "
-                       "(0: sampled with the encoders; -Ts/2: held over the following sample; > 0: the sensor reads late)"}
+                       "(0: sampled with the encoders; -Ts/2: held over the following sample)"}
